@@ -1,0 +1,29 @@
+# Two commands a new user needs: `make demo` and `make test`. Both set up first when needed.
+VENV ?= .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.pcrp-setup
+
+.PHONY: setup demo test clean-venv
+
+setup: $(STAMP)
+
+$(STAMP): requirements.txt requirements.lock setup.py
+	@# open3d 0.20 cannot import without libusb; install it from Debian when missing.
+	@ldconfig -p | grep -q 'libusb-1.0.so.0' || { \
+	  echo "installing libusb-1.0-0 (needed by open3d)"; \
+	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq libusb-1.0-0; }
+	@test -x $(PY) || python3 -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -r requirements.txt -c requirements.lock
+	$(PY) -m pip install -q --no-deps -e .
+	@touch $(STAMP)
+
+demo: setup
+	$(VENV)/bin/pcrp demo
+
+test: setup
+	$(PY) -m pytest -q test
+
+clean-venv:
+	rm -rf $(VENV)

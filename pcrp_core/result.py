@@ -1,0 +1,66 @@
+"""The one object a query returns, shaped after Open3D's RegistrationResult."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class PoseResult:
+    """Which gallery object a cloud is, and where it is.
+
+    The pose maps the gallery object's canonical frame into the query's frame:
+    ``p_query = scale * rotation @ p_gallery + translation``.
+    """
+
+    gallery_id: str
+    category: str
+    rotation: np.ndarray          # (3, 3), proper rotation
+    translation: np.ndarray       # (3,), in the query's units
+    scale: float = 1.0            # query size / gallery object size
+    score: float = 0.0            # fit after alignment in [0, 1], higher is better
+    fitness: float = 0.0          # share of query points near the aligned gallery object
+    inlier_rmse: float = float("inf")  # RMS distance of those points, query units
+    chamfer: float = float("inf")      # symmetric-free one-way chamfer, query -> gallery, normalised units
+    rejected: bool = False
+    reason: str = ""              # why it was rejected; empty when accepted
+    candidates: tuple = ()        # retrieval top-k as ((gallery_id, distance), ...)
+    timings: dict = field(default_factory=dict)  # seconds per stage, plus "total"
+    n_points: int = 0             # points used after cleaning and downsampling
+
+    @property
+    def transform(self) -> np.ndarray:
+        """4x4 homogeneous matrix of the pose (scale folded into the 3x3 block)."""
+        T = np.eye(4)
+        T[:3, :3] = self.scale * np.asarray(self.rotation)
+        T[:3, 3] = self.translation
+        return T
+
+    @property
+    def quaternion(self) -> np.ndarray:
+        """(x, y, z, w), the order geometry_msgs/Quaternion uses."""
+        from scipy.spatial.transform import Rotation
+
+        return Rotation.from_matrix(np.asarray(self.rotation)).as_quat()
+
+    def to_dict(self) -> dict:
+        """Plain JSON-ready form."""
+        return {
+            "gallery_id": self.gallery_id,
+            "category": self.category,
+            "rotation": np.asarray(self.rotation).tolist(),
+            "translation": np.asarray(self.translation).tolist(),
+            "quaternion_xyzw": self.quaternion.tolist(),
+            "scale": float(self.scale),
+            "transform": self.transform.tolist(),
+            "score": float(self.score),
+            "fitness": float(self.fitness),
+            "inlier_rmse": float(self.inlier_rmse),
+            "chamfer": float(self.chamfer),
+            "rejected": bool(self.rejected),
+            "reason": self.reason,
+            "candidates": [[g, float(d)] for g, d in self.candidates],
+            "timings": {k: float(v) for k, v in self.timings.items()},
+            "n_points": int(self.n_points),
+        }

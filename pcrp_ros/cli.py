@@ -1,0 +1,13 @@
+"""The `pcrp` command: pcrp_core's commands plus the ROS and rosbag ones."""
+import sys
+
+from pcrp_core import cli as core_cli
+
+
+def main(argv=None):
+    parser = core_cli.build_parser()
+    return core_cli.run(parser, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

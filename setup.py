@@ -1,0 +1,34 @@
+"""ament_python package `pcrp`: works with `colcon build` on a Jazzy install and `pip install -e .`."""
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = "pcrp"
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(include=["pcrp_core", "pcrp_core.*", "pcrp_ros", "pcrp_ros.*"]),
+    package_data={"pcrp_core": ["data/*", "data/*/*", "data/*/*/*"]},
+    include_package_data=True,
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}/config", glob("config/*.yaml")),
+        (f"share/{PACKAGE}/launch", glob("launch/*.launch.py")),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=False,
+    maintainer="pcrp maintainers",
+    maintainer_email="pcrp@example.com",
+    description="Unsupervised point cloud object retrieval and pose estimation (PCRP) for ROS 2",
+    license="Apache-2.0",
+    tests_require=["pytest"],
+    python_requires=">=3.10",
+    entry_points={
+        "console_scripts": [
+            "pcrp = pcrp_ros.cli:main",
+            "pcrp_node = pcrp_ros.node:main",
+        ],
+    },
+)
