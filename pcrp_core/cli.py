@@ -1,4 +1,4 @@
-"""`pcrp` command line: build | query | demo (and eval, bench later). ROS commands are added by pcrp_ros.cli.
+"""`pcrp` command line: build | query (core); make-bag | replay | process | demo are added by pcrp_ros.
 
 Each subcommand lives in a `register(subparsers)` function that adds its parser and sets
 `func` to a handler taking the parsed args and returning an exit code. Heavy imports stay
@@ -7,13 +7,117 @@ inside handlers so `pcrp --help` is instant.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+import time
+
+
+def _progress(it, **kw):
+    from tqdm import tqdm
+    return tqdm(it, leave=False, file=sys.stderr, disable=None, **kw)
+
+
+def _fail(message: str) -> int:
+    print(f"pcrp: error: {message}", file=sys.stderr)
+    return 2
+
+
+def register_build(sub) -> None:
+    p = sub.add_parser("build", help="build a gallery model from ModelNet40 archives, mesh/cloud folders or the generator",
+                       description="Build a model: fit FR-PointHop and the VLAD codebook on the gallery objects, "
+                                   "describe every object, and save the model directory.")
+    p.add_argument("sources", nargs="+", help="ModelNet40 archive (chair.npz), folder with one sub-folder per "
+                                              "category of meshes/clouds, or procedural[:N]")
+    p.add_argument("--out", required=True, help="model directory to write")
+    p.add_argument("--split", default="train", choices=["train", "test"], help="archive split (default train)")
+    p.add_argument("--n-points", type=int, default=1024, help="points per gallery object (default 1024)")
+    p.add_argument("--hop1", default="fpfh", choices=["fpfh", "octant"],
+                   help="first-hop attribute: FPFH (FR-PointHop, default) or octant coordinates (R-PointHop)")
+    p.add_argument("--aggregation", default="vlad", choices=["vlad", "max"], help="global descriptor (default vlad)")
+    p.add_argument("--clusters", type=int, default=10, help="VLAD codebook size (default 10)")
+    p.add_argument("--limit", type=int, default=None, help="at most this many objects per source category")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=_build)
+
+
+def _build(args) -> int:
+    from pcrp_core import PCRP
+    from pcrp_core.model_io import model_size
+    from pcrp_core.sources import load_sources
+
+    t0 = time.perf_counter()
+    try:
+        objects = load_sources(args.sources, split=args.split, n_points=args.n_points, seed=args.seed,
+                               limit_per_category=args.limit)
+    except (OSError, ValueError) as e:
+        return _fail(str(e))
+    print(f"{len(objects)} objects in {len(set(o.category for o in objects))} categories; fitting...", file=sys.stderr)
+    model = PCRP.build(objects, hop1=args.hop1, n_clusters=args.clusters, aggregation=args.aggregation,
+                       n_points=args.n_points, seed=args.seed, sources=args.sources, progress=_progress)
+    model.save(args.out)
+    size = model_size(args.out)
+    print(f"built {args.out}: {len(objects)} objects, categories {', '.join(model.categories)}, "
+          f"feature dimension {model.pointhop.n_features_}, descriptor dimension {model.gallery.vectors.shape[1]}, "
+          f"{time.perf_counter() - t0:.1f} s, {size / 1e6:.2f} MB on disk "
+          f"({model.size_report()})")
+    return 0
+
+
+def register_query(sub) -> None:
+    p = sub.add_parser("query", help="retrieve the gallery object and its pose for one cloud file")
+    p.add_argument("model", help="model directory ('default' for the shipped one)")
+    p.add_argument("cloud", help="cloud file: PLY, PCD, XYZ or NPY (N, 3); meshes are sampled")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--candidates", type=int, default=None, help="gallery objects to verify (n_candidates)")
+    p.add_argument("--min-score", type=float, default=None, help="reject below this fit score")
+    p.set_defaults(func=_query)
+
+
+def _query(args) -> int:
+    from pcrp_core import InvalidCloud, ModelError, PCRP
+    from pcrp_core.sources.folder import read_points
+
+    try:
+        model = PCRP.load(None if args.model == "default" else args.model)
+    except ModelError as e:
+        return _fail(str(e))
+    try:
+        points = read_points(args.cloud)
+    except (OSError, ValueError) as e:
+        return _fail(f"{args.cloud}: {e}")
+    opts = {k: v for k, v in (("n_candidates", args.candidates), ("min_score", args.min_score)) if v is not None}
+    try:
+        model.set_options(**opts)
+        result = model.estimate(points)
+    except (InvalidCloud, ValueError) as e:
+        return _fail(f"{args.cloud}: {e}")
+    if args.json:
+        print(json.dumps(result.to_dict(), indent=1))
+        return 0
+    print(format_result(result))
+    return 0
+
+
+def format_result(r) -> str:
+    import numpy as np
+
+    rows = [f"gallery_id  {r.gallery_id}", f"category    {r.category}",
+            f"status      {'REJECTED: ' + r.reason if r.rejected else 'accepted'}",
+            f"score       {r.score:.3f} (fitness {r.fitness:.3f}, inlier rmse {r.inlier_rmse:.4g}, chamfer {r.chamfer:.4f})",
+            f"scale       {r.scale:.4f}",
+            "rotation    " + np.array2string(np.asarray(r.rotation), precision=4, suppress_small=True,
+                                             prefix="            "),
+            "translation " + np.array2string(np.asarray(r.translation), precision=4, suppress_small=True),
+            "quaternion  (x, y, z, w) " + np.array2string(r.quaternion, precision=4, suppress_small=True),
+            "candidates  " + ", ".join(f"{g} ({d:.3f})" for g, d in r.candidates[:5]),
+            "timings ms  " + ", ".join(f"{k} {v * 1000:.1f}" for k, v in r.timings.items())]
+    return "\n".join(rows)
 
 
 def build_parser(extensions=()) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="pcrp", description="PCRP point cloud object retrieval and pose estimation")
     sub = parser.add_subparsers(dest="command", required=True)
-    for register in (*_CORE_COMMANDS, *extensions):
+    for register in (register_build, register_query, *extensions):
         register(sub)
     return parser
 
@@ -21,9 +125,6 @@ def build_parser(extensions=()) -> argparse.ArgumentParser:
 def run(parser: argparse.ArgumentParser, argv=None) -> int:
     args = parser.parse_args(argv)
     return int(args.func(args) or 0)
-
-
-_CORE_COMMANDS: list = []  # filled below as commands are written
 
 
 def main(argv=None) -> int:

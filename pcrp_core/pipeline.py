@@ -1,13 +1,32 @@
-"""PCRP: wires the stages together; load/save, retrieve, estimate. Holds no maths of its own."""
+"""PCRP: wires the stages together; build, load/save, retrieve, estimate. Holds no maths of its own.
+
+Units. Gallery objects keep their own frame and units. Internally every cloud is centred on
+its centroid and divided by one model-wide unit (the gallery's median object radius), so the
+features' radii mean the same for every object. A query is taken to be in the gallery's units
+(scale_mode="metric", the robot case: meshes and depth camera both in metres) and reported with
+scale 1; with scale_mode="normalize" its size is unknown, it is rescaled to each candidate's
+size and the reported scale is query size / gallery object size (complete objects only: a
+one-sided view looks smaller than the object).
+"""
 from __future__ import annotations
 
+import time
+from collections import OrderedDict
 from pathlib import Path
 
 import numpy as np
 
+from pcrp_core import model_io
+from pcrp_core.errors import InvalidCloud, ModelError
+from pcrp_core.features import PointHop
+from pcrp_core.gallery import Gallery
+from pcrp_core.pose import PoseOptions, Prepared, Registrar, prepare, shape_distance
+from pcrp_core.preprocess import check_geometry, downsample, finite_points
 from pcrp_core.result import PoseResult
+from pcrp_core.vlad import VLAD
 
 DEFAULT_MODEL = Path(__file__).parent / "data" / "default_model"
+SCALE_MODES = ("metric", "normalize")
 
 
 def default_model_path() -> Path:
@@ -15,21 +34,240 @@ def default_model_path() -> Path:
     return DEFAULT_MODEL
 
 
+def _rms_radius(points: np.ndarray) -> float:
+    return float(np.sqrt(((points - points.mean(0)) ** 2).sum(1).mean()))
+
+
 class PCRP:
     """A gallery of pre-aligned objects and the unsupervised models fitted on it.
 
-    Interface (stable; the node, the evaluation and the benchmarks call it):
-      PCRP.load(path) -> PCRP            raises ModelError with a clear message
-      model.save(path)
-      model.estimate(points) -> PoseResult   raises InvalidCloud(reason, msg) on unusable input
-      model.retrieve(points, k=10) -> [(gallery_id, distance), ...]
-      model.gallery_ids -> list[str]; model.category_of(gid) -> str
-      model.gallery_cloud(gid) -> (M, 3) float array in the gallery object's own frame and units
-      model.min_points (int), model.max_points (int): inputs above max are downsampled
-      model.n_candidates, model.min_score, model.refine: runtime options (settable attributes)
+    Runtime options (plain attributes, validated by `set_options`): n_candidates (gallery
+    objects registered and verified per query; 1 is the paper), min_score (reject below this
+    fit score), refine (ICP), min_points, max_points, scale_mode, seed.
     """
 
-    min_points = 32
+    def __init__(self, pointhop: PointHop, vlad: VLAD, gallery: Gallery, unit: float, meta: dict | None = None,
+                 n_points: int = 1024):
+        self.pointhop = pointhop
+        self.vlad = vlad
+        self.gallery = gallery
+        self.unit = float(unit)
+        self.meta = dict(meta or {})
+        self.n_points = int(n_points)
+        self.pose_options = PoseOptions()
+        self.n_candidates = 5
+        self.n_matched = 2
+        self.n_rerank = 0
+        self.min_score = 0.5
+        self.min_points = 32
+        self.max_points = self.n_points
+        self.scale_mode = "metric"
+        self.seed = 0
+        self.cache_size = 256
+        self._cache: OrderedDict[tuple, Prepared] = OrderedDict()
+        self._radii = np.array([_rms_radius(c) for c in gallery.clouds]) if len(gallery) else np.zeros(0)
 
-    def __init__(self, *args, **kwargs):
-        raise NotImplementedError("being written")
+    # -- options --------------------------------------------------------------------------------
+    @property
+    def refine(self) -> bool:
+        return self.pose_options.refine
+
+    @refine.setter
+    def refine(self, value: bool) -> None:
+        self.pose_options.refine = bool(value)
+
+    def set_options(self, **options) -> None:
+        """Set runtime options, refusing invalid values with a ValueError that says why."""
+        checks = {
+            "n_candidates": lambda v: isinstance(v, int) and 1 <= v <= 50,
+            "n_matched": lambda v: isinstance(v, int) and 1 <= v <= 50,
+            "n_rerank": lambda v: isinstance(v, int) and 0 <= v <= 500,
+            "min_score": lambda v: isinstance(v, (int, float)) and 0.0 <= v <= 1.0,
+            "refine": lambda v: isinstance(v, bool),
+            "min_points": lambda v: isinstance(v, int) and 8 <= v,
+            "max_points": lambda v: isinstance(v, int) and 64 <= v <= 100_000,
+            "scale_mode": lambda v: v in SCALE_MODES,
+            "seed": lambda v: isinstance(v, int),
+        }
+        for name, value in options.items():
+            if name not in checks:
+                raise ValueError(f"unknown option {name!r}; known: {sorted(checks)}")
+            if not checks[name](value):
+                raise ValueError(f"invalid value {value!r} for option {name}")
+        merged = {"min_points": self.min_points, "max_points": self.max_points, **options}
+        if merged["min_points"] > merged["max_points"]:
+            raise ValueError("min_points must not exceed max_points")
+        for name, value in options.items():
+            setattr(self, name, value)
+
+    # -- gallery access -------------------------------------------------------------------------
+    @property
+    def gallery_ids(self) -> list[str]:
+        return list(self.gallery.ids)
+
+    @property
+    def categories(self) -> list[str]:
+        return sorted(set(self.gallery.categories))
+
+    def category_of(self, gallery_id: str) -> str:
+        return self.gallery.categories[self.gallery.index[gallery_id]]
+
+    def gallery_cloud(self, gallery_id: str) -> np.ndarray:
+        """The gallery object's points in its own canonical frame and units."""
+        return self.gallery.clouds[self.gallery.index[gallery_id]]
+
+    # -- building -------------------------------------------------------------------------------
+    @classmethod
+    def build(cls, objects, *, hop1: str = "fpfh", n_clusters: int = 10, aggregation: str = "vlad",
+              n_points: int = 1024, fit_clouds: int = 400, energy_threshold1: float = 1e-3,
+              energy_threshold2: float = 5e-4, seed: int = 0, sources=(), progress=None) -> "PCRP":
+        """Fit FR-PointHop and the VLAD codebook on the gallery, then describe every object.
+
+        objects: GalleryObject-like items (gallery_id, category, points), pre-aligned.
+        fit_clouds bounds how many objects the Saab kernels are fitted on (PCA needs far
+        fewer samples than a large gallery has); progress wraps iterables (e.g. tqdm).
+        """
+        objects = list(objects)
+        if not objects:
+            raise ValueError("cannot build a model from an empty gallery")
+        wrap = progress or (lambda it, **_: it)
+        clouds = [downsample(finite_points(o.points), n_points, seed) for o in objects]
+        unit = float(np.median([np.linalg.norm(c - c.mean(0), axis=1).max() for c in clouds]))
+        normed = [(c - c.mean(0)) / unit for c in clouds]
+        rng = np.random.default_rng(seed)
+        fit_idx = rng.choice(len(normed), min(fit_clouds, len(normed)), replace=False)
+        pointhop = PointHop(hop1=hop1, energy_threshold1=energy_threshold1,
+                            energy_threshold2=energy_threshold2, random_state=seed)
+        pointhop.fit([normed[i] for i in fit_idx])
+        feats = [pointhop.transform(c)[1] for c in wrap(normed, desc="features", unit="obj")]
+        vlad = VLAD(n_clusters=n_clusters, aggregation=aggregation, random_state=seed)
+        if aggregation == "vlad":
+            vlad.fit(np.concatenate(feats))
+        vectors = np.stack([vlad.transform(f) for f in feats])
+        gallery = Gallery([o.gallery_id for o in objects], [o.category for o in objects],
+                          [c.astype(np.float32) for c in clouds], vectors)
+        meta = {"sources": list(sources), "n_objects": len(objects), "n_points": n_points,
+                "feature_dim": int(pointhop.n_features_), "built": time.strftime("%Y-%m-%dT%H:%M:%S")}
+        return cls(pointhop, vlad, gallery, unit, meta, n_points)
+
+    def size_report(self) -> str:
+        """Bytes of each part as stored (uncompressed float32), for comparing with the paper."""
+        kernels = sum(v.nbytes for v in self.pointhop.get_state().values())
+        codebook = self.vlad.codebook_.nbytes if self.vlad.aggregation == "vlad" else 0
+        clouds = sum(c.nbytes for c in self.gallery.clouds)
+        return (f"kernels {kernels / 1e3:.0f} kB, codebook + VLAD vectors "
+                f"{(codebook + self.gallery.vectors.nbytes) / 1e6:.2f} MB, gallery clouds {clouds / 1e6:.1f} MB")
+
+    # -- files ----------------------------------------------------------------------------------
+    def save(self, path) -> Path:
+        arrays = {**self.pointhop.get_state(), **self.gallery.to_arrays()}
+        if self.vlad.aggregation == "vlad":
+            arrays["vlad_codebook"] = self.vlad.codebook_
+        meta = {**self.meta, "unit": self.unit, "n_points": self.n_points,
+                "pointhop": self.pointhop.get_params(),
+                "vlad": {"n_clusters": self.vlad.n_clusters, "aggregation": self.vlad.aggregation},
+                "gallery_ids": self.gallery.ids, "gallery_categories": self.gallery.categories}
+        return model_io.write_model(path, meta, arrays)
+
+    @classmethod
+    def load(cls, path=None) -> "PCRP":
+        path = Path(path) if path else DEFAULT_MODEL
+        meta, arrays = model_io.read_model(path)
+        try:
+            pointhop = PointHop.from_state(meta["pointhop"], arrays)
+            vlad = VLAD(n_clusters=meta["vlad"]["n_clusters"], aggregation=meta["vlad"]["aggregation"])
+            if vlad.aggregation == "vlad":
+                vlad.codebook_ = arrays["vlad_codebook"]
+            gallery = Gallery.from_arrays(meta["gallery_ids"], meta["gallery_categories"], arrays)
+            model = cls(pointhop, vlad, gallery, meta["unit"], meta, meta["n_points"])
+        except (KeyError, TypeError, ValueError) as e:
+            raise ModelError(f"{path}: model contents are incomplete or inconsistent ({type(e).__name__}: {e})") from None
+        model.meta["path"] = str(path)
+        return model
+
+    # -- querying -------------------------------------------------------------------------------
+    def _clean(self, points) -> np.ndarray:
+        pts = finite_points(points)
+        if len(pts) == 0:
+            raise InvalidCloud("no_finite_points", "the cloud has no finite points")
+        pts = downsample(pts, min(self.max_points, self.n_points), self.seed)
+        check_geometry(pts, self.min_points)
+        return pts
+
+    def _describe(self, normed: np.ndarray):
+        sampled, feats = self.pointhop.transform(normed)
+        return sampled, feats, self.vlad.transform(feats)
+
+    def _prepared(self, i: int, features: bool) -> Prepared:
+        """Registration-ready gallery object, recomputed on demand and kept in a bounded LRU cache
+        (a stream sees the same few objects again and again). Point features are computed only
+        for objects that seed hypotheses; verifiers need just the cloud and its tree."""
+        key = (i, features)
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
+        cloud = self.gallery.clouds[i].astype(np.float64)
+        normed = (cloud - cloud.mean(0)) / self.unit
+        prep = prepare(normed, *self.pointhop.transform(normed)) if features else prepare(normed)
+        self._cache[key] = prep
+        while len(self._cache) > self.cache_size:
+            self._cache.popitem(last=False)
+        return prep
+
+    def retrieve(self, points, k: int = 10) -> list[tuple[str, float]]:
+        """The k gallery objects whose VLAD vectors are nearest the query's, with distances."""
+        pts = self._clean(points)
+        _, _, vec = self._describe((pts - pts.mean(0)) / self.unit)
+        idx, dist = self.gallery.search(vec, k)
+        return [(self.gallery.ids[i], float(d)) for i, d in zip(idx, dist)]
+
+    def estimate(self, points) -> PoseResult:
+        """Retrieve, register, verify. Raises InvalidCloud for input no pose can be read from."""
+        t0 = time.perf_counter()
+        timings = {}
+        pts = self._clean(points)
+        centre = pts.mean(0)
+        normed = (pts - centre) / self.unit
+        t1 = time.perf_counter()
+        timings["preprocess"] = t1 - t0
+        sampled, feats, vec = self._describe(normed)
+        t2 = time.perf_counter()
+        timings["features"] = t2 - t1
+        idx, dist = self.gallery.search(vec, max(10, self.n_candidates, self.n_rerank))
+        t3 = time.perf_counter()
+        timings["retrieval"] = t3 - t2
+        rng = np.random.default_rng(self.seed)
+        ratio = 1.0
+        if self.scale_mode == "normalize":
+            # one size for the query: the first candidate's (the others are of its kind)
+            ratio = self._radii[idx[0]] / max(_rms_radius(pts), 1e-12)
+        registrar = Registrar(prepare(normed * ratio, sampled, feats), self.pose_options, rng)
+        top = [int(i) for i in idx[: max(self.n_candidates, self.n_rerank)]]
+        if self.n_rerank > self.n_candidates:
+            # verify more retrieved objects cheaply, register only the best-fitting few
+            cost = [shape_distance(registrar.query.points, registrar.src, self._prepared(i, False)) for i in top]
+            top = [top[n] for n in np.argsort(cost, kind="stable")]
+        top = top[: self.n_candidates]
+        t4 = time.perf_counter()
+        timings["rerank"] = t4 - t3
+        matched = [self._prepared(i, features=True) for i in top[: self.n_matched]]
+        verifiers = matched + [self._prepared(i, features=False) for i in top[self.n_matched:]]
+        j, h = registrar.best_pose(matched, verifiers)
+        i = top[j]
+        timings["registration"] = time.perf_counter() - t4
+        # g_n = R' (ratio q_n) + t'  with q_n = (q - centre)/unit, g_n = (g - c_g)/unit
+        # => q = (1/ratio) R'^T (g - c_g) - (unit/ratio) R'^T t' + centre
+        c_g = self.gallery.clouds[i].astype(np.float64).mean(0)
+        R = h.R.T
+        scale = 1.0 / ratio
+        t = centre - scale * (R @ (c_g + self.unit * h.t))
+        score = h.fitness
+        rejected = score < self.min_score
+        timings["total"] = time.perf_counter() - t0
+        return PoseResult(
+            gallery_id=self.gallery.ids[i], category=self.gallery.categories[i], rotation=R,
+            translation=t, scale=scale, score=score, fitness=h.fitness,
+            inlier_rmse=h.rmse * self.unit / ratio, chamfer=h.chamfer, rejected=rejected,
+            reason=f"fit score {score:.2f} below min_score {self.min_score:.2f}" if rejected else "",
+            candidates=tuple((self.gallery.ids[j], float(d)) for j, d in zip(idx, dist)),
+            timings=timings, n_points=len(pts))

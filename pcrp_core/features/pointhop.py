@@ -1,0 +1,100 @@
+"""FR-PointHop: rotation-invariant point features in two hops, fitted without labels.
+
+Hop 1 describes each point by FPFH (or, as in R-PointHop, by the mean local coordinates of
+its neighbours in the eight octants of its local frame) and compresses it with Saab. Hop 2
+keeps half the points by farthest-point sampling, gathers each one's hop-1 responses per
+octant of its own local frame and compresses each channel with its own Saab. A point's
+feature is its hop-1 response beside its hop-2 responses.
+
+Clouds are expected in normalised units (object radius about 1): radii and neighbourhood
+sizes are hyperparameters of that scale.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from pcrp_core.features.fpfh import fpfh, oriented_normals
+from pcrp_core.features.lrf import local_frames
+from pcrp_core.features.neighbours import knn
+from pcrp_core.features.octants import octant_coordinates, octant_means
+from pcrp_core.features.saab import ChannelwiseSaab, Saab
+from pcrp_core.preprocess import farthest_point_sampling
+
+HOP1_ATTRIBUTES = ("fpfh", "octant")
+
+
+class PointHop:
+    def __init__(self, hop1: str = "fpfh", fpfh_radius: float = 0.3, normal_k: int = 20,
+                 k1: int = 32, k2: int = 64, sample_ratio: float = 0.5,
+                 energy_threshold1: float = 1e-3, energy_threshold2: float = 5e-4,
+                 fit_points: int = 200_000, random_state: int = 0):
+        if hop1 not in HOP1_ATTRIBUTES:
+            raise ValueError(f"hop1 must be one of {HOP1_ATTRIBUTES}, got {hop1!r}")
+        self.hop1 = hop1
+        self.fpfh_radius = fpfh_radius
+        self.normal_k = normal_k
+        self.k1 = k1
+        self.k2 = k2
+        self.sample_ratio = sample_ratio
+        self.energy_threshold1 = energy_threshold1
+        self.energy_threshold2 = energy_threshold2
+        self.fit_points = fit_points
+        self.random_state = random_state
+
+    # -- the two hops, shared by fit and transform ------------------------------------
+    def _hop1_attributes(self, points: np.ndarray, tree: cKDTree) -> np.ndarray:
+        if self.hop1 == "fpfh":
+            return fpfh(points, oriented_normals(points, self.normal_k), self.fpfh_radius)
+        nb = knn(points, points, self.k1, tree)
+        frames = local_frames(points, points, nb, points.mean(axis=0))
+        return octant_coordinates(points, points, nb, frames)
+
+    def _hop2_octants(self, points, tree, hop1_responses):
+        sampled = farthest_point_sampling(points, max(1, int(round(len(points) * self.sample_ratio))))
+        centres = points[sampled]
+        nb = knn(points, centres, self.k2, tree)
+        frames = local_frames(points, centres, nb, points.mean(axis=0))
+        return sampled, octant_means(points, centres, nb, frames, hop1_responses)
+
+    # -- estimator ----------------------------------------------------------------------
+    def fit(self, clouds) -> "PointHop":
+        rng = np.random.default_rng(self.random_state)
+        per_cloud = max(1, self.fit_points // max(1, len(clouds)))
+        trees = [cKDTree(c) for c in clouds]
+        attrs = [self._hop1_attributes(c, t) for c, t in zip(clouds, trees)]
+        stacked = np.concatenate([a[rng.choice(len(a), min(per_cloud, len(a)), replace=False)] for a in attrs])
+        self.saab1_ = Saab(self.energy_threshold1).fit(stacked)
+        octs = []
+        for c, t, a in zip(clouds, trees, attrs):
+            sampled, o = self._hop2_octants(c, t, self.saab1_.transform(a))
+            octs.append(o[rng.choice(len(o), min(per_cloud, len(o)), replace=False)])
+        parent = self.saab1_.energy_ratio_[: self.saab1_.n_components_]
+        self.saab2_ = ChannelwiseSaab(self.energy_threshold2).fit(np.concatenate(octs), parent)
+        self.n_features_ = self.saab1_.n_components_ + self.saab2_.n_components_
+        return self
+
+    def transform(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(sampled indices (M,), features (M, D)) of one normalised cloud."""
+        tree = cKDTree(points)
+        h1 = self.saab1_.transform(self._hop1_attributes(points, tree))
+        sampled, octs = self._hop2_octants(points, tree, h1)
+        h2 = self.saab2_.transform(octs)
+        return sampled, np.concatenate([h1[sampled], h2], axis=1).astype(np.float32)
+
+    # -- model files ------------------------------------------------------------------------
+    def get_params(self) -> dict:
+        return {k: getattr(self, k) for k in ("hop1", "fpfh_radius", "normal_k", "k1", "k2", "sample_ratio",
+                                              "energy_threshold1", "energy_threshold2", "fit_points",
+                                              "random_state")}
+
+    def get_state(self) -> dict:
+        return {**self.saab1_.get_state("hop1_"), **self.saab2_.get_state("hop2_")}
+
+    @classmethod
+    def from_state(cls, params: dict, state: dict) -> "PointHop":
+        ph = cls(**params)
+        ph.saab1_ = Saab.from_state(state, "hop1_")
+        ph.saab2_ = ChannelwiseSaab.from_state(state, "hop2_", ph.saab1_.n_components_)
+        ph.n_features_ = ph.saab1_.n_components_ + ph.saab2_.n_components_
+        return ph

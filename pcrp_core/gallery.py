@@ -1,0 +1,49 @@
+"""The gallery: pre-aligned objects, their clouds and their global vectors, and the search."""
+from __future__ import annotations
+
+import numpy as np
+
+
+class Gallery:
+    def __init__(self, ids, categories, clouds, vectors: np.ndarray):
+        if not (len(ids) == len(categories) == len(clouds) == len(vectors)):
+            raise ValueError("gallery ids, categories, clouds and vectors differ in length")
+        if len(set(ids)) != len(ids):
+            raise ValueError("gallery IDs must be unique")
+        self.ids = list(ids)
+        self.categories = list(categories)
+        self.clouds = [np.asarray(c, dtype=np.float32) for c in clouds]
+        self.vectors = np.asarray(vectors, dtype=np.float32)
+        self.index = {g: i for i, g in enumerate(self.ids)}
+        self._sq = (self.vectors ** 2).sum(1)
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def search(self, vector: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Indices and Euclidean distances of the k nearest stored vectors, nearest first.
+
+        Brute force: a matrix-vector product over even 10,000 objects costs well under a
+        millisecond-scale budget, and is exact.
+        """
+        k = max(1, min(k, len(self)))
+        d2 = np.maximum(self._sq - 2.0 * self.vectors @ vector + float(vector @ vector), 0.0)
+        idx = np.argpartition(d2, k - 1)[:k]
+        # exact distances for the few kept: the expanded form above cancels badly near zero
+        dist = np.linalg.norm(self.vectors[idx] - vector, axis=1)
+        order = np.argsort(dist, kind="stable")
+        return idx[order], dist[order]
+
+    def to_arrays(self) -> dict:
+        lengths = np.array([len(c) for c in self.clouds], dtype=np.int64)
+        return {"gallery_vectors": self.vectors,
+                "gallery_points": np.concatenate(self.clouds) if self.clouds else np.zeros((0, 3), np.float32),
+                "gallery_lengths": lengths}
+
+    @classmethod
+    def from_arrays(cls, ids, categories, arrays: dict) -> "Gallery":
+        ends = np.cumsum(arrays["gallery_lengths"])
+        if len(ends) != len(ids) or (len(ends) and ends[-1] != len(arrays["gallery_points"])):
+            raise ValueError("gallery clouds do not match the gallery IDs")
+        clouds = np.split(arrays["gallery_points"], ends[:-1]) if len(ends) else []
+        return cls(ids, categories, clouds, arrays["gallery_vectors"])

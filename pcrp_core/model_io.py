@@ -1,0 +1,74 @@
+"""Model directory format: `model.json` (metadata) + `arrays.npz` (numbers). Never pickle.
+
+`model.json` holds the format version, hyperparameters, gallery IDs and categories and what the
+model was built from, plus the SHA-256 of `arrays.npz`, so a truncated or altered array file
+is refused with a message instead of producing wrong poses.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from pcrp_core.errors import ModelError
+
+FORMAT = "pcrp-model"
+FORMAT_VERSION = 1
+META_FILE = "model.json"
+ARRAYS_FILE = "arrays.npz"
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def write_model(path, meta: dict, arrays: dict) -> Path:
+    path = Path(path)
+    path.mkdir(parents=True, exist_ok=True)
+    arrays_path = path / ARRAYS_FILE
+    np.savez_compressed(arrays_path, **arrays)
+    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta,
+            "arrays_sha256": _sha256(arrays_path)}
+    (path / META_FILE).write_text(json.dumps(meta, indent=1))
+    return path
+
+
+def read_model(path) -> tuple[dict, dict]:
+    path = Path(path)
+    if not path.exists():
+        raise ModelError(f"{path}: no such model (expected a directory with {META_FILE} and {ARRAYS_FILE})")
+    if path.is_file():
+        raise ModelError(f"{path}: a model is a directory holding {META_FILE} and {ARRAYS_FILE}, not a file")
+    meta_path, arrays_path = path / META_FILE, path / ARRAYS_FILE
+    for p in (meta_path, arrays_path):
+        if not p.is_file():
+            raise ModelError(f"{p}: missing from the model directory")
+    try:
+        meta = json.loads(meta_path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ModelError(f"{meta_path}: unreadable model metadata ({e})") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        raise ModelError(f"{meta_path}: not a pcrp model (format field is {meta.get('format') if isinstance(meta, dict) else None!r})")
+    if meta.get("format_version") != FORMAT_VERSION:
+        raise ModelError(f"{meta_path}: model format version {meta.get('format_version')!r}, "
+                         f"this pcrp reads version {FORMAT_VERSION}; rebuild the model with `pcrp build`")
+    if _sha256(arrays_path) != meta.get("arrays_sha256"):
+        raise ModelError(f"{arrays_path}: checksum does not match {META_FILE} (truncated or modified)")
+    try:
+        with np.load(arrays_path, allow_pickle=False) as npz:
+            arrays = {k: npz[k] for k in npz.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+        raise ModelError(f"{arrays_path}: unreadable arrays ({e})") from None
+    return meta, arrays
+
+
+def model_size(path) -> int:
+    """Bytes on disk of a model directory."""
+    return sum(p.stat().st_size for p in Path(path).glob("*") if p.is_file())

@@ -1,0 +1,216 @@
+"""Pose of a query relative to the retrieved gallery objects: hypotheses, refinement, verification.
+
+Hypotheses come from the paper's method (feature matches within symmetry halves, both
+pairings of the halves, Procrustes in RANSAC) on the first retrieved objects and, beyond it,
+from principal axes and from the half turns about the canonical axes of each hypothesis: the
+turns that near-symmetric objects (a car's front and back) are confused by.
+
+Verification goes past the paper: every surviving hypothesis is refined by ICP against each
+of the top retrieved objects, and the rotation that sits best on all of them together wins.
+Because the gallery is pre-aligned, all candidates share one canonical frame, so a right
+rotation fits every candidate of the category, while a flip that happens to suit one
+instance is outvoted by the others. All of it happens in normalised coordinates, query
+registered onto gallery: g ≈ R @ q + t.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from pcrp_core.registration import fit_quality, icp, ransac
+from pcrp_core.registration.correspondences import matches_within_halves
+from pcrp_core.symmetry import principal_axes, split_halves
+
+FLIPS = np.array([np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0])])
+
+
+@dataclass
+class Prepared:
+    """One cloud ready to register: all points and their tree; for feature matching also the
+    sampled points, their features and their symmetry halves (None where not computed)."""
+    points: np.ndarray
+    tree: cKDTree
+    sampled: np.ndarray | None = None
+    features: np.ndarray | None = None
+    halves: np.ndarray | None = None
+
+
+def prepare(points: np.ndarray, sampled_idx=None, features=None) -> Prepared:
+    if sampled_idx is None:
+        return Prepared(points, cKDTree(points))
+    sampled = points[sampled_idx]
+    return Prepared(points, cKDTree(points), sampled, features, split_halves(sampled))
+
+
+@dataclass
+class PoseOptions:
+    ransac_iterations: int = 500
+    ransac_threshold: float = 0.08
+    symmetry_split: bool = True
+    pca_hypotheses: bool = True
+    pca_seeds: int = 6
+    flips: bool = True
+    refine: bool = True
+    consensus: bool = True
+    consensus_weight: float = 0.5
+    coarse_icp_iterations: int = 6
+    icp_iterations: int = 30
+    icp_trim: float = 0.8
+    icp_points: int = 256
+    inlier_distance: float = 0.05
+
+
+@dataclass
+class Hypothesis:
+    R: np.ndarray
+    t: np.ndarray
+    fitness: float
+    rmse: float
+    chamfer: float
+    source: str
+
+
+def _proper_signed_permutations() -> np.ndarray:
+    """The 24 rotations that map coordinate axes onto coordinate axes."""
+    import itertools
+    mats = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1.0, -1.0), repeat=3):
+            M = np.zeros((3, 3))
+            M[range(3), perm] = signs
+            if np.linalg.det(M) > 0:
+                mats.append(M)
+    return np.array(mats)
+
+
+AXIS_ROTATIONS = _proper_signed_permutations()
+
+
+def _pca_seeds(q: np.ndarray, g: np.ndarray, src: np.ndarray, tree: cKDTree, keep: int):
+    """Rotations taking the query's principal axes onto the gallery's under each of the 24
+    axis-to-axis maps (two instances of a category need not order their axes alike), the
+    `keep` that fit best before any refinement: right for complete objects, a cheap extra
+    guess for partial ones."""
+    Rs, ts, cost = _pca_costs(q, g, src, tree)
+    for n in np.argsort(cost)[:keep]:
+        yield Rs[n], ts[n], "pca"
+
+
+def shape_distance(query_points: np.ndarray, src: np.ndarray, gallery: Prepared) -> float:
+    """Cheap rotation-free dissimilarity: the best mean distance of the query to the gallery
+    object over the 24 principal-axis alignments, no refinement. Used to re-rank retrieved
+    candidates before the costly registration."""
+    return min(_pca_costs(query_points, gallery.points, src, gallery.tree)[2])
+
+
+def _pca_costs(q, g, src, tree):
+    aq, ag = principal_axes(q), principal_axes(g)
+    Rs = np.einsum("ji,njk,kl->nil", ag, AXIS_ROTATIONS, aq)    # ag.T @ M @ aq
+    ts = g.mean(0) - Rs @ q.mean(0)
+    moved = src[None] @ Rs.transpose(0, 2, 1) + ts[:, None, :]
+    d, _ = tree.query(moved.reshape(-1, 3))
+    return Rs, ts, d.reshape(len(Rs), -1).mean(1)
+
+
+def _ransac_seeds(query: Prepared, gallery: Prepared, opts: PoseOptions, rng):
+    if opts.symmetry_split:
+        settings = [(query.halves, gallery.halves, True), (query.halves, gallery.halves, False)]
+    else:
+        settings = [(np.ones(len(query.sampled), bool), np.ones(len(gallery.sampled), bool), True)]
+    for qh, gh, same in settings:
+        qi, gi, _ = matches_within_halves(query.features, gallery.features, qh, gh, same)
+        if len(qi) >= 3:
+            R, t, _ = ransac(query.sampled[qi], gallery.sampled[gi], opts.ransac_threshold,
+                             opts.ransac_iterations, rng)
+            yield R, t, "ransac"
+
+
+def _flip(R, t, centre):
+    """The three half turns about canonical axes through the gallery centroid."""
+    for F in FLIPS:
+        yield F @ R, F @ (t - centre) + centre
+
+
+class Registrar:
+    """Holds the query's subsample used for ICP and scoring, so it is drawn once per query."""
+
+    def __init__(self, query: Prepared, opts: PoseOptions, rng: np.random.Generator):
+        self.query, self.opts, self.rng = query, opts, rng
+        src = query.sampled if query.sampled is not None else query.points
+        if len(src) > opts.icp_points:
+            src = src[rng.choice(len(src), opts.icp_points, replace=False)]
+        self.src = src
+
+    def refine(self, R, t, gallery: Prepared, iterations: int, source: str) -> Hypothesis:
+        if self.opts.refine and iterations > 0:
+            R, t = icp(self.src, gallery.points, gallery.tree, R, t, iterations, self.opts.icp_trim)
+        fit, rmse, ch = fit_quality(self.src @ R.T + t, gallery.tree, self.opts.inlier_distance)
+        return Hypothesis(R, t, fit, rmse, ch, source)
+
+    def seeds(self, gallery: Prepared):
+        """Coarsely refined hypotheses for one feature-bearing gallery object."""
+        seeds = list(_ransac_seeds(self.query, gallery, self.opts, self.rng))
+        if self.opts.pca_hypotheses or not seeds:
+            seeds += list(_pca_seeds(self.query.points, gallery.points, self.src, gallery.tree, self.opts.pca_seeds))
+        hyps = [self.refine(R, t, gallery, self.opts.coarse_icp_iterations, s) for R, t, s in seeds]
+        if self.opts.flips:
+            best = min(hyps, key=lambda h: h.chamfer)
+            hyps += [self.refine(R, t, gallery, self.opts.coarse_icp_iterations, best.source + "+flip")
+                     for R, t in _flip(best.R, best.t, gallery.points.mean(0))]
+        return hyps
+
+    def best_pose(self, matched: list[Prepared], verifiers: list[Prepared]) -> tuple[int, Hypothesis]:
+        """(index into verifiers of the best-fitting object, its refined hypothesis).
+
+        matched: the first retrieved objects, with features, that seed hypotheses;
+        verifiers: all top retrieved objects (matched first) that vote on them.
+        """
+        pool = []
+        for g in matched:
+            hyps = sorted(self.seeds(g), key=lambda h: h.chamfer)
+            pool += _distinct(hyps, 2)
+        if not self.opts.consensus or len(verifiers) == 1:
+            best = min(pool, key=lambda h: h.chamfer)
+            return 0, self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source)
+        # chamfer of each hypothesis on each candidate, after a short refinement there
+        ch = np.array([[self.refine(h.R, h.t, g, self.opts.coarse_icp_iterations, "").chamfer
+                        for g in verifiers] for h in pool])
+        # the best fit decides when one candidate is the very object; the median over
+        # candidates decides between near-symmetric flips that one instance happens to suit
+        k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch, axis=1)))
+        best = pool[k]
+        refined = [self.refine(best.R, best.t, g, self.opts.icp_iterations, best.source) for g in verifiers]
+        j = int(np.argmin([h.chamfer for h in refined]))
+        avg = _average(refined, refined[j])
+        return j, self.refine(avg.R, avg.t, verifiers[j], 0, avg.source)
+
+
+def _average(hyps: list[Hypothesis], anchor: Hypothesis) -> Hypothesis:
+    """Pose averaged over the candidates that agree with the best one, weighted by fit.
+
+    Each pre-aligned candidate gives its own estimate of the query's canonical pose, off by
+    how that instance differs from the query; averaging cancels much of that, and the 1/chamfer^2
+    weights let an exact gallery match dominate.
+    """
+    cos_max = np.cos(np.radians(15.0))
+    agree = [h for h in hyps if (np.trace(h.R @ anchor.R.T) - 1) / 2 > cos_max and h.chamfer < 2.0 * anchor.chamfer]
+    w = np.array([1.0 / max(h.chamfer, 1e-4) ** 2 for h in agree])
+    M = sum(wi * h.R for wi, h in zip(w, agree))
+    U, _, Vt = np.linalg.svd(M)
+    R = U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))]) @ Vt
+    t = sum(wi * h.t for wi, h in zip(w, agree)) / w.sum()
+    return Hypothesis(R, t, anchor.fitness, anchor.rmse, anchor.chamfer, anchor.source + f"+avg{len(agree)}")
+
+
+def _distinct(hyps, n, min_angle_deg=10.0):
+    """The n best hypotheses whose rotations differ by more than min_angle from each other."""
+    kept = []
+    cos_min = np.cos(np.radians(min_angle_deg))
+    for h in hyps:
+        if all((np.trace(h.R @ k.R.T) - 1) / 2 < cos_min for k in kept):
+            kept.append(h)
+        if len(kept) == n:
+            break
+    return kept

@@ -1,0 +1,22 @@
+"""Shared test data: real ModelNet40 objects when the shared folder is there."""
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+MODELNET = Path(__file__).resolve().parents[2] / "shared" / "data" / "modelnet40"
+
+
+def modelnet(category: str, split: str = "train", count: int = 10, start: int = 0):
+    with np.load(MODELNET / f"{category}.npz", allow_pickle=False) as d:
+        return (d[f"{split}_points"][start:start + count].astype(np.float64),
+                [str(n) for n in d[f"{split}_names"][start:start + count]])
+
+
+def random_pose(rng):
+    return Rotation.random(random_state=rng).as_matrix(), rng.uniform(-0.5, 0.5, 3)
+
+
+def rotation_error_deg(R_est, R_true) -> float:
+    c = (np.trace(np.asarray(R_est).T @ R_true) - 1.0) / 2.0
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
