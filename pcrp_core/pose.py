@@ -50,15 +50,18 @@ class PoseOptions:
     ransac_threshold: float = 0.08
     symmetry_split: bool = True
     pca_hypotheses: bool = True
-    pca_seeds: int = 6
+    pca_seeds: int = 4
     flips: bool = True
     refine: bool = True
     consensus: bool = True
     consensus_weight: float = 0.5
+    seed_all_candidates: bool = True
+    reverse_weight: float = 0.0
     coarse_icp_iterations: int = 6
     icp_iterations: int = 30
     icp_trim: float = 0.8
     icp_points: int = 256
+    coarse_points: int = 256
     inlier_distance: float = 0.05
 
 
@@ -142,16 +145,25 @@ class Registrar:
         if len(src) > opts.icp_points:
             src = src[rng.choice(len(src), opts.icp_points, replace=False)]
         self.src = src
+        # hypotheses are told apart on fewer points than the final refinement uses
+        self.coarse_src = src[: opts.coarse_points]
 
-    def refine(self, R, t, gallery: Prepared, iterations: int, source: str) -> Hypothesis:
+    def refine(self, R, t, gallery: Prepared, iterations: int, source: str, coarse: bool = True) -> Hypothesis:
+        src = self.coarse_src if coarse else self.src
         if self.opts.refine and iterations > 0:
-            R, t = icp(self.src, gallery.points, gallery.tree, R, t, iterations, self.opts.icp_trim)
-        fit, rmse, ch = fit_quality(self.src @ R.T + t, gallery.tree, self.opts.inlier_distance)
+            R, t = icp(src, gallery.points, gallery.tree, R, t, iterations, self.opts.icp_trim)
+        moved = src @ R.T + t
+        fit, rmse, ch = fit_quality(moved, gallery.tree, self.opts.inlier_distance)
+        if self.opts.reverse_weight > 0:
+            # the gallery object's points near the query too: absent parts count against a pose
+            back = cKDTree(moved).query(gallery.points[:: max(1, len(gallery.points) // len(moved))])[0]
+            k = max(1, int(0.8 * len(back)))
+            ch = ch + self.opts.reverse_weight * float(np.mean(np.partition(back, k - 1)[:k]))
         return Hypothesis(R, t, fit, rmse, ch, source)
 
     def seeds(self, gallery: Prepared):
         """Coarsely refined hypotheses for one feature-bearing gallery object."""
-        seeds = list(_ransac_seeds(self.query, gallery, self.opts, self.rng))
+        seeds = list(_ransac_seeds(self.query, gallery, self.opts, self.rng)) if gallery.features is not None else []
         if self.opts.pca_hypotheses or not seeds:
             seeds += list(_pca_seeds(self.query.points, gallery.points, self.src, gallery.tree, self.opts.pca_seeds))
         hyps = [self.refine(R, t, gallery, self.opts.coarse_icp_iterations, s) for R, t, s in seeds]
@@ -168,12 +180,13 @@ class Registrar:
         verifiers: all top retrieved objects (matched first) that vote on them.
         """
         pool = []
-        for g in matched:
+        seeders = verifiers if self.opts.seed_all_candidates else matched
+        for g in seeders:
             hyps = sorted(self.seeds(g), key=lambda h: h.chamfer)
             pool += _distinct(hyps, 2)
         if not self.opts.consensus or len(verifiers) == 1:
             best = min(pool, key=lambda h: h.chamfer)
-            return 0, self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source)
+            return 0, self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source, coarse=False)
         # chamfer of each hypothesis on each candidate, after a short refinement there
         ch = np.array([[self.refine(h.R, h.t, g, self.opts.coarse_icp_iterations, "").chamfer
                         for g in verifiers] for h in pool])
@@ -181,10 +194,11 @@ class Registrar:
         # candidates decides between near-symmetric flips that one instance happens to suit
         k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch, axis=1)))
         best = pool[k]
-        refined = [self.refine(best.R, best.t, g, self.opts.icp_iterations, best.source) for g in verifiers]
+        refined = [self.refine(best.R, best.t, g, self.opts.icp_iterations, best.source, coarse=False)
+                   for g in verifiers]
         j = int(np.argmin([h.chamfer for h in refined]))
         avg = _average(refined, refined[j])
-        return j, self.refine(avg.R, avg.t, verifiers[j], 0, avg.source)
+        return j, self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
 
 
 def _average(hyps: list[Hypothesis], anchor: Hypothesis) -> Hypothesis:

@@ -20,6 +20,15 @@ def procrustes_batch(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def procrustes(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """R (3, 3), t (3,) minimising |R @ src + t - dst| over matched rows of (n, 3) arrays."""
-    R, t = procrustes_batch(src[None], dst[None])
-    return R[0], t[0]
+    """R (3, 3), t (3,) minimising |R @ src + t - dst| over matched rows of (n, 3) arrays.
+
+    Written out rather than calling the batch form: ICP calls it thousands of times per
+    query and the batch bookkeeping would cost more than the SVD."""
+    mu_s = src.mean(axis=0)
+    mu_d = dst.mean(axis=0)
+    U, _, Vt = np.linalg.svd((src - mu_s).T @ (dst - mu_d))
+    R = Vt.T @ U.T
+    if np.linalg.det(R) < 0:
+        Vt[2] = -Vt[2]
+        R = Vt.T @ U.T
+    return R, mu_d - R @ mu_s
