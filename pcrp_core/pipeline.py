@@ -55,7 +55,7 @@ class PCRP:
         self.meta = dict(meta or {})
         self.n_points = int(n_points)
         self.pose_options = PoseOptions()
-        self.n_candidates = 5
+        self.n_candidates = 8
         self.n_matched = 2
         self.n_rerank = 0
         self.min_score = 0.5

@@ -56,12 +56,13 @@ class PoseOptions:
     consensus: bool = True
     consensus_weight: float = 0.5
     seed_all_candidates: bool = True
+    pool_size: int = 6
     reverse_weight: float = 0.0
     coarse_icp_iterations: int = 6
-    icp_iterations: int = 30
+    icp_iterations: int = 20
     icp_trim: float = 0.8
     icp_points: int = 256
-    coarse_points: int = 256
+    coarse_points: int = 128
     inlier_distance: float = 0.05
 
 
@@ -165,7 +166,7 @@ class Registrar:
         """Coarsely refined hypotheses for one feature-bearing gallery object."""
         seeds = list(_ransac_seeds(self.query, gallery, self.opts, self.rng)) if gallery.features is not None else []
         if self.opts.pca_hypotheses or not seeds:
-            seeds += list(_pca_seeds(self.query.points, gallery.points, self.src, gallery.tree, self.opts.pca_seeds))
+            seeds += list(_pca_seeds(self.query.points, gallery.points, self.coarse_src, gallery.tree, self.opts.pca_seeds))
         hyps = [self.refine(R, t, gallery, self.opts.coarse_icp_iterations, s) for R, t, s in seeds]
         if self.opts.flips:
             best = min(hyps, key=lambda h: h.chamfer)
@@ -182,8 +183,9 @@ class Registrar:
         pool = []
         seeders = verifiers if self.opts.seed_all_candidates else matched
         for g in seeders:
-            hyps = sorted(self.seeds(g), key=lambda h: h.chamfer)
-            pool += _distinct(hyps, 2)
+            pool += _distinct(sorted(self.seeds(g), key=lambda h: h.chamfer), 2)
+        # the best few distinct rotations go to the vote; the rest only cost time
+        pool = _distinct(sorted(pool, key=lambda h: h.chamfer), self.opts.pool_size)
         if not self.opts.consensus or len(verifiers) == 1:
             best = min(pool, key=lambda h: h.chamfer)
             return 0, self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source, coarse=False)
