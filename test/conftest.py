@@ -1,0 +1,26 @@
+"""Session-wide fixtures: one small real gallery model, built once for the whole suite."""
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from helpers import MODELNET, modelnet  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def small_model(tmp_path_factory):
+    """40 training objects each of chair, sofa and airplane from ModelNet40, saved and loaded back."""
+    if not MODELNET.exists():
+        pytest.skip("needs ../shared/data/modelnet40")
+    from pcrp_core import PCRP
+
+    objects = []
+    for category in ("chair", "sofa", "airplane"):
+        points, names = modelnet(category, "train", 40)
+        objects += [SimpleNamespace(gallery_id=n, category=category, points=p) for n, p in zip(names, points)]
+    path = tmp_path_factory.mktemp("model") / "small"
+    PCRP.build(objects, seed=0, sources=["modelnet40 test subset"]).save(path)
+    return path

@@ -1,0 +1,94 @@
+"""End to end on real ModelNet40 objects: retrieval, pose, rejection of unusable input."""
+import numpy as np
+import pytest
+
+from helpers import modelnet, random_pose, rotation_error_deg
+from pcrp_core import InvalidCloud, PCRP
+
+
+@pytest.fixture(scope="module")
+def model(small_model):
+    return PCRP.load(small_model)
+
+
+def test_gallery_objects_in_random_poses_come_back_exactly(model):
+    rng = np.random.default_rng(11)
+    for gid in model.gallery_ids[::17]:
+        p = model.gallery_cloud(gid).astype(np.float64)
+        R, t = random_pose(rng)
+        r = model.estimate((p @ R.T + t)[rng.permutation(len(p))])
+        assert r.gallery_id == gid and not r.rejected
+        assert rotation_error_deg(r.rotation, R) < 1.0
+        np.testing.assert_allclose(r.translation, t, atol=0.01)
+        np.testing.assert_allclose(r.transform[:3, :3], R, atol=0.02)
+        assert r.score > 0.9 and r.scale == 1.0
+        assert set(r.timings) >= {"features", "retrieval", "registration", "total"}
+
+
+@pytest.mark.parametrize("category", ["chair", "sofa"])
+def test_held_back_objects_get_their_category_and_pose(model, category):
+    points, _ = modelnet(category, "test", 12)
+    rng = np.random.default_rng(5)
+    errors, right = [], []
+    for p in points:
+        R, t = random_pose(rng)
+        r = model.estimate(p @ R.T + t)
+        errors.append(rotation_error_deg(r.rotation, R))
+        right.append(r.category == category)
+    # a 40-object-per-category gallery: far smaller than the real one, so bounds are looser
+    assert np.mean(right) >= 0.75
+    assert np.median(errors) < 15.0
+    assert np.mean(np.array(errors) < 30.0) >= 0.5
+
+
+def test_same_object_under_two_rotations_gives_the_same_canonical_pose(model):
+    p = modelnet("chair", "test", 1, start=4)[0][0]
+    rng = np.random.default_rng(8)
+    poses = []
+    for _ in range(2):
+        R, t = random_pose(rng)
+        r = model.estimate(p @ R.T + t)
+        # undo the known motion: what remains is the estimated pose of the object itself
+        poses.append(R.T @ r.rotation)
+    assert rotation_error_deg(poses[0], poses[1]) < 5.0
+
+
+def test_retrieve_returns_k_sorted_pairs(model):
+    gid = model.gallery_ids[50]
+    hits = model.retrieve(model.gallery_cloud(gid), k=7)
+    assert len(hits) == 7 and hits[0][0] == gid
+    assert all(a[1] <= b[1] for a, b in zip(hits, hits[1:]))
+
+
+def test_large_clouds_are_downsampled_and_answered(model):
+    gid = model.gallery_ids[10]
+    p = model.gallery_cloud(gid).astype(np.float64)
+    rng = np.random.default_rng(2)
+    dense = np.repeat(p, 20, axis=0) + rng.normal(scale=1e-3, size=(len(p) * 20, 3))
+    r = model.estimate(dense)
+    assert r.gallery_id == gid and r.n_points == model.max_points
+
+
+@pytest.mark.parametrize("cloud, reason", [
+    (np.zeros((0, 3)), "no_finite_points"),
+    (np.full((100, 3), np.nan), "no_finite_points"),
+    (np.random.default_rng(0).normal(size=(10, 3)), "too_few_points"),
+    (np.ones((500, 3)), "too_few_points"),
+    (np.outer(np.linspace(0, 1, 500), [1.0, 2.0, 3.0]), "degenerate"),
+    (np.zeros((10, 2)), "bad_shape"),
+])
+def test_unusable_clouds_raise_with_a_reason(model, cloud, reason):
+    with pytest.raises(InvalidCloud) as err:
+        model.estimate(cloud)
+    assert err.value.reason == reason
+
+
+def test_options_are_validated(model):
+    with pytest.raises(ValueError, match="n_candidates"):
+        model.set_options(n_candidates=0)
+    with pytest.raises(ValueError, match="unknown option"):
+        model.set_options(colour="red")
+    with pytest.raises(ValueError, match="min_points must not exceed"):
+        model.set_options(min_points=5000)
+    model.set_options(min_score=0.3)
+    assert model.min_score == 0.3
