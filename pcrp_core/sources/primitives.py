@@ -1,0 +1,77 @@
+"""Surface sampling of simple solids, area-uniform, for the procedural generator."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def _rot_x(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _rot_z(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+class Box:
+    def __init__(self, centre, size, R=None):
+        self.c, self.s, self.R = np.asarray(centre, float), np.asarray(size, float), np.eye(3) if R is None else R
+
+    def area(self):
+        a, b, c = self.s
+        return 2 * (a * b + b * c + a * c)
+
+    def sample(self, n, rng):
+        a, b, c = self.s
+        faces = np.array([b * c, b * c, a * c, a * c, a * b, a * b])
+        face = rng.choice(6, n, p=faces / faces.sum())
+        u = rng.uniform(-0.5, 0.5, (n, 3))
+        axis = face // 2
+        u[np.arange(n), axis] = np.where(face % 2 == 0, -0.5, 0.5)
+        return (u * self.s) @ self.R.T + self.c
+
+
+class Cylinder:
+    """Closed cylinder along the local z axis, then rotated by R."""
+
+    def __init__(self, centre, radius, length, R=None):
+        self.c, self.r, self.h, self.R = np.asarray(centre, float), radius, length, np.eye(3) if R is None else R
+
+    def area(self):
+        return 2 * np.pi * self.r * self.h + 2 * np.pi * self.r ** 2
+
+    def sample(self, n, rng):
+        side = 2 * np.pi * self.r * self.h
+        on_side = rng.uniform(0, self.area(), n) < side
+        theta = rng.uniform(0, 2 * np.pi, n)
+        rad = np.where(on_side, self.r, self.r * np.sqrt(rng.uniform(0, 1, n)))
+        z = np.where(on_side, rng.uniform(-self.h / 2, self.h / 2, n),
+                     np.where(rng.uniform(0, 1, n) < 0.5, -self.h / 2, self.h / 2))
+        p = np.column_stack([rad * np.cos(theta), rad * np.sin(theta), z])
+        return p @ self.R.T + self.c
+
+
+class Ellipsoid:
+    def __init__(self, centre, radii):
+        self.c, self.r = np.asarray(centre, float), np.asarray(radii, float)
+
+    def area(self):
+        a, b, c = self.r  # Knud Thomsen's approximation
+        p = 1.6075
+        return 4 * np.pi * (((a * b) ** p + (a * c) ** p + (b * c) ** p) / 3) ** (1 / p)
+
+    def sample(self, n, rng):
+        v = rng.normal(size=(n, 3))
+        return v / np.linalg.norm(v, axis=1, keepdims=True) * self.r + self.c
+
+
+def sample_parts(parts, n, rng) -> np.ndarray:
+    """n points over all parts, each part getting points in proportion to its area."""
+    areas = np.array([p.area() for p in parts])
+    counts = rng.multinomial(n, areas / areas.sum())
+    return np.concatenate([p.sample(k, rng) for p, k in zip(parts, counts) if k])
+
+
+ROT_X = _rot_x
+ROT_Z = _rot_z
