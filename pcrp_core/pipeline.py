@@ -194,8 +194,8 @@ class PCRP:
         check_geometry(pts, self.min_points)
         return pts
 
-    def _describe(self, normed: np.ndarray):
-        sampled, feats = self.pointhop.transform(normed)
+    def _describe(self, normed: np.ndarray, viewpoint=None):
+        sampled, feats = self.pointhop.transform(normed, viewpoint)
         return sampled, feats, self.vlad.transform(feats)
 
     def _prepared(self, i: int, features: bool) -> Prepared:
@@ -214,15 +214,22 @@ class PCRP:
             self._cache.popitem(last=False)
         return prep
 
-    def retrieve(self, points, k: int = 10) -> list[tuple[str, float]]:
+    def _viewpoint(self, viewpoint, centre):
+        return None if viewpoint is None else (np.asarray(viewpoint, dtype=np.float64) - centre) / self.unit
+
+    def retrieve(self, points, k: int = 10, viewpoint=None) -> list[tuple[str, float]]:
         """The k gallery objects whose VLAD vectors are nearest the query's, with distances."""
         pts = self._clean(points)
-        _, _, vec = self._describe((pts - pts.mean(0)) / self.unit)
+        _, _, vec = self._describe((pts - pts.mean(0)) / self.unit, self._viewpoint(viewpoint, pts.mean(0)))
         idx, dist = self.gallery.search(vec, k)
         return [(self.gallery.ids[i], float(d)) for i, d in zip(idx, dist)]
 
-    def estimate(self, points) -> PoseResult:
-        """Retrieve, register, verify. Raises InvalidCloud for input no pose can be read from."""
+    def estimate(self, points, viewpoint=None) -> PoseResult:
+        """Retrieve, register, verify. Raises InvalidCloud for input no pose can be read from.
+
+        viewpoint: the sensor's position in the cloud's frame when the cloud is what one sensor
+        saw (np.zeros(3) for a cloud in the camera's own frame); None for complete objects.
+        """
         t0 = time.perf_counter()
         timings = {}
         pts = self._clean(points)
@@ -230,7 +237,8 @@ class PCRP:
         normed = (pts - centre) / self.unit
         t1 = time.perf_counter()
         timings["preprocess"] = t1 - t0
-        sampled, feats, vec = self._describe(normed)
+        vp = self._viewpoint(viewpoint, centre)
+        sampled, feats, vec = self._describe(normed, vp)
         t2 = time.perf_counter()
         timings["features"] = t2 - t1
         idx, dist = self.gallery.search(vec, max(10, self.n_candidates, self.n_rerank))
@@ -241,7 +249,8 @@ class PCRP:
         if self.scale_mode == "normalize":
             # one size for the query: the first candidate's (the others are of its kind)
             ratio = self._radii[idx[0]] / max(_rms_radius(pts), 1e-12)
-        registrar = Registrar(prepare(normed * ratio, sampled, feats), self.pose_options, rng)
+        registrar = Registrar(prepare(normed * ratio, sampled, feats), self.pose_options, rng,
+                              None if vp is None else vp * ratio)
         top = [int(i) for i in idx[: max(self.n_candidates, self.n_rerank)]]
         if self.n_rerank > self.n_candidates:
             # verify more retrieved objects cheaply, register only the best-fitting few

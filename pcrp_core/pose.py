@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 from pcrp_core.registration import fit_quality, icp, ransac
 from pcrp_core.registration.correspondences import matches_within_halves
 from pcrp_core.symmetry import principal_axes, split_halves
+from pcrp_core.visibility import visible_from
 
 FLIPS = np.array([np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0])])
 
@@ -58,11 +59,12 @@ class PoseOptions:
     seed_all_candidates: bool = True
     pool_size: int = 6
     reverse_weight: float = 0.0
+    visibility_weight: float = 1.0
     coarse_icp_iterations: int = 6
     icp_iterations: int = 20
     icp_trim: float = 0.8
     icp_points: int = 256
-    coarse_points: int = 128
+    coarse_points: int = 256
     inlier_distance: float = 0.05
 
 
@@ -140,8 +142,9 @@ def _flip(R, t, centre):
 class Registrar:
     """Holds the query's subsample used for ICP and scoring, so it is drawn once per query."""
 
-    def __init__(self, query: Prepared, opts: PoseOptions, rng: np.random.Generator):
+    def __init__(self, query: Prepared, opts: PoseOptions, rng: np.random.Generator, viewpoint=None):
         self.query, self.opts, self.rng = query, opts, rng
+        self.viewpoint = viewpoint
         src = query.sampled if query.sampled is not None else query.points
         if len(src) > opts.icp_points:
             src = src[rng.choice(len(src), opts.icp_points, replace=False)]
@@ -155,12 +158,27 @@ class Registrar:
             R, t = icp(src, gallery.points, gallery.tree, R, t, iterations, self.opts.icp_trim)
         moved = src @ R.T + t
         fit, rmse, ch = fit_quality(moved, gallery.tree, self.opts.inlier_distance)
-        if self.opts.reverse_weight > 0:
+        if self.viewpoint is not None and self.opts.visibility_weight > 0:
+            ch = ch + self.opts.visibility_weight * self._unexplained(moved, R @ self.viewpoint + t, gallery)
+        elif self.opts.reverse_weight > 0:
             # the gallery object's points near the query too: absent parts count against a pose
             back = cKDTree(moved).query(gallery.points[:: max(1, len(gallery.points) // len(moved))])[0]
             k = max(1, int(0.8 * len(back)))
             ch = ch + self.opts.reverse_weight * float(np.mean(np.partition(back, k - 1)[:k]))
         return Hypothesis(R, t, fit, rmse, ch, source)
+
+    def _unexplained(self, moved, camera, gallery: Prepared) -> float:
+        """Trimmed mean distance from the gallery points the sensor would see under this pose
+        to the query. A one-sided view only says what is there, not what is missing; seen
+        from the sensor, the posed gallery object must show what the query shows, which is
+        what tells a sofa seen from the front from one seen from behind."""
+        g = gallery.points[:: max(1, len(gallery.points) // 256)]
+        vis = g[visible_from(g, camera)]
+        if len(vis) == 0:
+            return 1.0
+        d = cKDTree(moved).query(vis)[0]
+        k = max(1, int(0.8 * len(d)))
+        return float(np.mean(np.partition(d, k - 1)[:k]))
 
     def seeds(self, gallery: Prepared):
         """Coarsely refined hypotheses for one feature-bearing gallery object."""

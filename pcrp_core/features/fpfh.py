@@ -5,17 +5,22 @@ import numpy as np
 import open3d as o3d
 
 
-def oriented_normals(points: np.ndarray, k: int = 20) -> np.ndarray:
-    """Unit normals pointing away from the centroid.
+def oriented_normals(points: np.ndarray, k: int = 20, viewpoint: np.ndarray | None = None) -> np.ndarray:
+    """Unit normals pointing away from the centroid, or towards the sensor when its position
+    (viewpoint) is known.
 
-    Open3D's estimated normals have arbitrary signs, and FPFH changes with them; the
-    centroid rule is rotation-invariant and needs no camera position, so gallery objects
-    (complete) and queries (often one-sided) follow the same rule.
+    Open3D's estimated normals have arbitrary signs, and FPFH changes with them. Both rules
+    are rotation-invariant and give outward normals: the centroid rule on complete objects
+    (the gallery), the sensor rule on what a depth camera sees, whose centroid lies off the
+    object's and would flip the normals of whole surfaces.
     """
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn=k))
     normals = np.asarray(pcd.normals)
-    outward = np.einsum("ni,ni->n", normals, points - points.mean(axis=0))
+    if viewpoint is None:
+        outward = np.einsum("ni,ni->n", normals, points - points.mean(axis=0))
+    else:
+        outward = np.einsum("ni,ni->n", normals, viewpoint - points)
     return normals * np.where(outward < 0, -1.0, 1.0)[:, None]
 
 

@@ -12,15 +12,19 @@ import numpy as np
 
 
 def local_frames(points: np.ndarray, centres: np.ndarray, neighbours: np.ndarray,
-                 object_centre: np.ndarray) -> np.ndarray:
-    """(M, 3, 3) frames; rows are the x, y, z axes of each centre's frame."""
+                 object_centre: np.ndarray, viewpoint: np.ndarray | None = None) -> np.ndarray:
+    """(M, 3, 3) frames; rows are the x, y, z axes of each centre's frame. The normal axis
+    points away from object_centre, or towards the sensor at viewpoint when given."""
     nb = points[neighbours]                               # (M, k, 3)
     offsets = nb - nb.mean(axis=1, keepdims=True)
     cov = offsets.transpose(0, 2, 1) @ offsets
     _, vecs = np.linalg.eigh(cov)                          # ascending eigenvalues, columns
     x = vecs[:, :, 2]
     z = vecs[:, :, 0]
-    outward = np.einsum("mi,mi->m", z, centres - object_centre)
+    if viewpoint is None:
+        outward = np.einsum("mi,mi->m", z, centres - object_centre)
+    else:
+        outward = np.einsum("mi,mi->m", z, viewpoint - centres)
     z = z * np.where(outward < 0, -1.0, 1.0)[:, None]
     rel = ((nb - centres[:, None, :]) @ x[:, :, None])[..., 0]
     votes = np.sign(rel).sum(axis=1)

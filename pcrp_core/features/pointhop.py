@@ -43,18 +43,18 @@ class PointHop:
         self.random_state = random_state
 
     # -- the two hops, shared by fit and transform ------------------------------------
-    def _hop1_attributes(self, points: np.ndarray, tree: cKDTree) -> np.ndarray:
+    def _hop1_attributes(self, points: np.ndarray, tree: cKDTree, viewpoint=None) -> np.ndarray:
         if self.hop1 == "fpfh":
-            return fpfh(points, oriented_normals(points, self.normal_k), self.fpfh_radius)
+            return fpfh(points, oriented_normals(points, self.normal_k, viewpoint), self.fpfh_radius)
         nb = knn(points, points, self.k1, tree)
-        frames = local_frames(points, points, nb, points.mean(axis=0))
+        frames = local_frames(points, points, nb, points.mean(axis=0), viewpoint)
         return octant_coordinates(points, points, nb, frames)
 
-    def _hop2_octants(self, points, tree, hop1_responses):
+    def _hop2_octants(self, points, tree, hop1_responses, viewpoint=None):
         sampled = farthest_point_sampling(points, max(1, int(round(len(points) * self.sample_ratio))))
         centres = points[sampled]
         nb = knn(points, centres, self.k2, tree)
-        frames = local_frames(points, centres, nb, points.mean(axis=0))
+        frames = local_frames(points, centres, nb, points.mean(axis=0), viewpoint)
         return sampled, octant_means(points, centres, nb, frames, hop1_responses)
 
     # -- estimator ----------------------------------------------------------------------
@@ -74,11 +74,12 @@ class PointHop:
         self.n_features_ = self.saab1_.n_components_ + self.saab2_.n_components_
         return self
 
-    def transform(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(sampled indices (M,), features (M, D)) of one normalised cloud."""
+    def transform(self, points: np.ndarray, viewpoint: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(sampled indices (M,), features (M, D)) of one normalised cloud. viewpoint: the
+        sensor's position in the same coordinates, for one-sided views (see fpfh.oriented_normals)."""
         tree = cKDTree(points)
-        h1 = self.saab1_.transform(self._hop1_attributes(points, tree))
-        sampled, octs = self._hop2_octants(points, tree, h1)
+        h1 = self.saab1_.transform(self._hop1_attributes(points, tree, viewpoint))
+        sampled, octs = self._hop2_octants(points, tree, h1, viewpoint)
         h2 = self.saab2_.transform(octs)
         return sampled, np.concatenate([h1[sampled], h2], axis=1).astype(np.float32)
 

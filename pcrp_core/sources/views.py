@@ -2,8 +2,9 @@
 from __future__ import annotations
 
 import numpy as np
-import open3d as o3d
 from scipy.spatial.transform import Rotation
+
+from pcrp_core.visibility import visible_from
 
 
 def random_rotation(rng: np.random.Generator) -> np.ndarray:
@@ -11,12 +12,14 @@ def random_rotation(rng: np.random.Generator) -> np.ndarray:
     return Rotation.random(random_state=rng).as_matrix()
 
 
-def visible_from(points: np.ndarray, camera: np.ndarray) -> np.ndarray:
-    """Indices of the points a camera at `camera` sees (Open3D's hidden point removal)."""
-    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-    diameter = np.linalg.norm(points.max(0) - points.min(0))
-    _, idx = pcd.hidden_point_removal(camera, diameter * 100)
-    return np.asarray(idx)
+def sensor_view(points: np.ndarray, camera: np.ndarray, rng: np.random.Generator,
+                noise_sigma: float = 0.0) -> np.ndarray:
+    """The points a sensor at `camera` sees, with Gaussian noise of noise_sigma (in the
+    points' units) along each viewing ray, as a depth camera's range error."""
+    seen = points[visible_from(points, camera)]
+    rays = seen - camera
+    rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+    return (seen + rays * rng.normal(scale=noise_sigma, size=(len(seen), 1))).astype(np.float32)
 
 
 def partial_view(points: np.ndarray, rng: np.random.Generator, noise_sigma: float = 0.005,
@@ -32,10 +35,7 @@ def partial_view(points: np.ndarray, rng: np.random.Generator, noise_sigma: floa
         idx = visible_from(points, camera)
         if len(idx) >= min_keep * len(points):
             break
-    seen = points[idx]
-    rays = seen - camera
-    rays /= np.linalg.norm(rays, axis=1, keepdims=True)
-    return (seen + rays * rng.normal(scale=noise_sigma * radius, size=(len(seen), 1))).astype(np.float32)
+    return sensor_view(points, camera, rng, noise_sigma * radius)
 
 
 def crop_half_plane(points: np.ndarray, rng: np.random.Generator, keep: float = 0.7) -> np.ndarray:
