@@ -1,0 +1,201 @@
+"""pcrp_node: segmented object clouds in; gallery ID, pose and the aligned model out.
+
+Per input topic T: T/pose (PoseStamped), T/gallery_id (String), T/aligned_model (PointCloud2)
+and, where vision_msgs is installed, T/detections (Detection3DArray); all carry the input's
+header unchanged. Clouds are answered newest-first by one worker thread, so a slow model drops
+stale clouds (counted) instead of queueing them.
+"""
+from __future__ import annotations
+
+import sys
+import threading
+import time
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseStamped
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy, HistoryPolicy, qos_profile_sensor_data
+from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import String
+
+from pcrp_core import InvalidCloud, ModelError, PCRP
+from pcrp_ros.conversions import CloudFormatError, aligned_points, detections_msg, pointcloud2_to_xyz, pose_stamped, xyz_to_pointcloud2
+from pcrp_ros.stats import StreamStats
+
+# name: (default, description, range or None, read_only)
+PARAMETERS = {
+    "model_path": ("", "Model directory built by `pcrp build`; empty for the shipped default model.", None, True),
+    "input_topics": (["segmented_object"], "PointCloud2 topics of segmented objects, one object per message.", None, True),
+    "min_points": (32, "Clouds with fewer finite points are rejected (reason too_few_points).", (8, 100000), False),
+    "max_points": (1024, "Larger clouds are downsampled to this many points, never refused.", (64, 100000), False),
+    "n_candidates": (8, "Retrieved gallery objects registered and voted on per cloud (1 = the paper).", (1, 50), False),
+    "min_score": (0.5, "Fit score (share of points on the aligned model) below which a cloud is rejected.", (0.0, 1.0), False),
+    "refine": (True, "Refine poses with ICP.", None, False),
+    "publish_aligned_model": (True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.", None, False),
+    "sensor_at_origin": (True, "The cloud's frame is the sensor's own (one-sided views seen from its origin); "
+                               "false for complete objects or clouds already in a world frame.", None, False),
+    "qos_reliability": ("best_effort", "Input QoS reliability: best_effort (sensor data) or reliable.", None, True),
+    "qos_depth": (2, "Input QoS queue depth.", (1, 100), True),
+    "log_throttle_sec": (5.0, "Least seconds between two log lines of one kind.", (0.0, 3600.0), False),
+}
+MODEL_OPTIONS = ("min_points", "max_points", "n_candidates", "min_score", "refine")
+
+
+def _descriptor(name, default, description, bounds, read_only) -> ParameterDescriptor:
+    d = ParameterDescriptor(name=name, description=description, read_only=read_only)
+    if bounds is not None and isinstance(default, int) and not isinstance(default, bool):
+        d.integer_range = [IntegerRange(from_value=bounds[0], to_value=bounds[1], step=1)]
+    elif bounds is not None:
+        d.floating_point_range = [FloatingPointRange(from_value=float(bounds[0]), to_value=float(bounds[1]), step=0.0)]
+    return d
+
+
+class PcrpNode(Node):
+    def __init__(self, model: PCRP | None = None, **kwargs):
+        super().__init__("pcrp_node", **kwargs)
+        for name, (default, description, bounds, read_only) in PARAMETERS.items():
+            self.declare_parameter(name, default, _descriptor(name, default, description, bounds, read_only))
+        p = {name: self.get_parameter(name).value for name in PARAMETERS}
+        if p["qos_reliability"] not in ("best_effort", "reliable"):
+            raise ValueError(f"qos_reliability must be best_effort or reliable, not {p['qos_reliability']!r}")
+        self.model = model if model is not None else PCRP.load(p["model_path"] or None)
+        self.model.set_options(**{k: p[k] for k in MODEL_OPTIONS})
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p["qos_depth"],
+                         reliability=ReliabilityPolicy.BEST_EFFORT if p["qos_reliability"] == "best_effort"
+                         else ReliabilityPolicy.RELIABLE, durability=qos_profile_sensor_data.durability)
+        out_qos = QoSProfile(depth=10)   # reliable: a planner must not miss a pose
+        self.stats: dict[str, StreamStats] = {}
+        self._pubs: dict[str, dict] = {}
+        self._slots: dict[str, tuple] = {}
+        self._cv = threading.Condition()
+        self._running = True
+        for topic in p["input_topics"]:
+            sub = self.create_subscription(PointCloud2, topic, lambda msg, t=topic: self._on_cloud(t, msg), qos)
+            resolved = sub.topic_name
+            pubs = {"pose": self.create_publisher(PoseStamped, f"{resolved}/pose", out_qos),
+                    "gallery_id": self.create_publisher(String, f"{resolved}/gallery_id", out_qos),
+                    "aligned_model": self.create_publisher(PointCloud2, f"{resolved}/aligned_model", out_qos)}
+            try:
+                from vision_msgs.msg import Detection3DArray
+                pubs["detections"] = self.create_publisher(Detection3DArray, f"{resolved}/detections", out_qos)
+            except ImportError:
+                pass
+            self._pubs[topic] = pubs
+            self.stats[topic] = StreamStats()
+        self._diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.create_timer(1.0, self._publish_diagnostics)
+        self._worker = threading.Thread(target=self._work, name="pcrp_worker", daemon=True)
+        self._worker.start()
+        self.get_logger().info(f"pcrp_node: {len(self.model.gallery_ids)} gallery objects "
+                               f"({', '.join(self.model.categories)}), listening on "
+                               f"{', '.join(s.topic_name for s in self.subscriptions)}")
+
+    # -- parameters ---------------------------------------------------------------------------------
+    def _on_set_parameters(self, params) -> SetParametersResult:
+        changes = {p.name: p.value for p in params if p.name in MODEL_OPTIONS}
+        try:
+            self.model.set_options(**changes)   # validates every value before setting any
+        except ValueError as e:
+            return SetParametersResult(successful=False, reason=str(e))
+        return SetParametersResult(successful=True)
+
+    # -- receiving ------------------------------------------------------------------------------------
+    def _on_cloud(self, topic: str, msg: PointCloud2) -> None:
+        self.stats[topic].count("received")
+        with self._cv:
+            if topic in self._slots:
+                self.stats[topic].count("dropped_stale")
+            self._slots[topic] = (msg, time.monotonic())
+            self._cv.notify()
+
+    def _work(self) -> None:
+        while True:
+            with self._cv:
+                self._cv.wait_for(lambda: self._slots or not self._running)
+                if not self._running:
+                    return
+                topic = next(iter(self._slots))     # oldest-waiting topic first: fair across topics
+                msg, received = self._slots.pop(topic)
+            try:
+                self._answer(topic, msg, received)
+            except Exception as e:   # the stream must survive anything one cloud does
+                self._reject(topic, "internal_error", f"{type(e).__name__}: {e}")
+
+    def _reject(self, topic: str, reason: str, message: str) -> None:
+        self.stats[topic].count("rejected", reason)
+        self.get_logger().warn(f"{topic}: cloud rejected ({reason}): {message}",
+                               throttle_duration_sec=float(self.get_parameter("log_throttle_sec").value))
+
+    def _answer(self, topic: str, msg: PointCloud2, received: float) -> None:
+        try:
+            points = pointcloud2_to_xyz(msg)
+            viewpoint = np.zeros(3) if self.get_parameter("sensor_at_origin").value else None
+            result = self.model.estimate(points, viewpoint=viewpoint)
+        except (CloudFormatError, InvalidCloud) as e:
+            self._reject(topic, e.reason, str(e))
+            return
+        if result.rejected:
+            self._reject(topic, "low_score", result.reason)
+            return
+        pubs = self._pubs[topic]
+        pubs["pose"].publish(pose_stamped(result, msg.header))
+        pubs["gallery_id"].publish(String(data=result.gallery_id))
+        if self.get_parameter("publish_aligned_model").value:
+            cloud = aligned_points(result, self.model.gallery_cloud(result.gallery_id))
+            pubs["aligned_model"].publish(xyz_to_pointcloud2(cloud, msg.header))
+        if "detections" in pubs:
+            det = detections_msg(result, msg.header)
+            if det is not None:
+                pubs["detections"].publish(det)
+        stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+        now = self.get_clock().now().nanoseconds * 1e-9
+        self.stats[topic].timing(time.monotonic() - received, now - stamp)
+        self.stats[topic].count("answered")
+
+    # -- diagnostics ----------------------------------------------------------------------------------
+    def _publish_diagnostics(self) -> None:
+        arr = DiagnosticArray()
+        arr.header.stamp = self.get_clock().now().to_msg()
+        for topic, stats in self.stats.items():
+            snap = stats.snapshot()
+            level = DiagnosticStatus.OK if snap.get("answered", 0) or not snap.get("received", 0) else DiagnosticStatus.WARN
+            arr.status.append(DiagnosticStatus(
+                level=level, name=f"pcrp_node: {topic}", hardware_id="pcrp",
+                message=f"{snap.get('answered', 0)} answered of {snap.get('received', 0)}",
+                values=[KeyValue(key=k, value=f"{v:.1f}" if isinstance(v, float) else str(v)) for k, v in sorted(snap.items())]))
+        self._diag.publish(arr)
+
+    def destroy_node(self):
+        with self._cv:
+            self._running = False
+            self._cv.notify_all()
+        self._worker.join(timeout=5.0)
+        return super().destroy_node()
+
+
+def main(args=None) -> int:
+    rclpy.init(args=args)
+    try:
+        node = PcrpNode()
+    except (ModelError, ValueError) as e:
+        print(f"pcrp_node: error: {e}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 1
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

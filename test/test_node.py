@@ -1,0 +1,121 @@
+"""The node over real DDS: outputs, headers, agreement with the core, bad input, parameters."""
+import numpy as np
+import pytest
+from rclpy.parameter import Parameter
+
+from rosutil import ros_context, spinning, wait_for  # noqa: F401 (sets ROS_DOMAIN_ID first)
+from geometry_msgs.msg import PoseStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import PointCloud2, PointField
+from std_msgs.msg import Header, String
+from builtin_interfaces.msg import Time
+
+from helpers import random_pose, rotation_error_deg
+from pcrp_core import PCRP, default_model_path
+from pcrp_ros.conversions import xyz_to_pointcloud2
+from pcrp_ros.node import PcrpNode
+
+
+@pytest.fixture(scope="module")
+def model():
+    return PCRP.load(default_model_path())
+
+
+class Listener:
+    def __init__(self, node, topic):
+        self.poses, self.ids, self.aligned = [], [], []
+        node.create_subscription(PoseStamped, f"{topic}/pose", self.poses.append, 10)
+        node.create_subscription(String, f"{topic}/gallery_id", self.ids.append, 10)
+        node.create_subscription(PointCloud2, f"{topic}/aligned_model", self.aligned.append, 10)
+
+
+def _header(sec, frame="camera_optical_frame"):
+    return Header(stamp=Time(sec=sec, nanosec=123), frame_id=frame)
+
+
+def _posed(model, gid, rng):
+    p = model.gallery_cloud(gid).astype(np.float64)
+    R, t = random_pose(rng)
+    return p @ R.T + t + [0, 0, 2.0], R
+
+
+def test_node_answers_each_topic_with_the_cores_answer_and_the_inputs_header(model):
+    rng = np.random.default_rng(0)
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=[
+            Parameter("input_topics", value=["cam_a/object", "cam_b/object"]),
+            Parameter("sensor_at_origin", value=False)])
+        client = rclpy_node(ctx)
+        la, lb = Listener(client, "/cam_a/object"), Listener(client, "/cam_b/object")
+        qos = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
+        pa = client.create_publisher(PointCloud2, "/cam_a/object", qos)
+        pb = client.create_publisher(PointCloud2, "/cam_b/object", qos)
+        gids = model.gallery_ids
+        qa, Ra = _posed(model, gids[3], rng)
+        qb, Rb = _posed(model, gids[45], rng)
+        with spinning(ctx, node, client):
+            assert wait_for(lambda: pa.get_subscription_count() and pb.get_subscription_count(), 10)
+            pa.publish(xyz_to_pointcloud2(qa, _header(11)))
+            pb.publish(xyz_to_pointcloud2(qb, _header(22, "other_frame")))
+            assert wait_for(lambda: la.poses and lb.poses and la.ids and lb.ids and la.aligned, 60)
+        a, b = la.poses[0], lb.poses[0]
+        assert (a.header.stamp.sec, a.header.stamp.nanosec, a.header.frame_id) == (11, 123, "camera_optical_frame")
+        assert (b.header.stamp.sec, b.header.frame_id) == (22, "other_frame")
+        assert la.ids[0].data == gids[3] and lb.ids[0].data == gids[45]
+        core = model.estimate(qa.astype(np.float32).astype(np.float64))
+        q = a.pose.orientation
+        np.testing.assert_allclose(np.abs(np.dot([q.x, q.y, q.z, q.w], core.quaternion)), 1.0, atol=1e-6)
+        np.testing.assert_allclose([a.pose.position.x, a.pose.position.y, a.pose.position.z], core.translation, atol=1e-5)
+        assert rotation_error_deg(core.rotation, Ra) < 2.0
+        assert la.aligned[0].header.frame_id == "camera_optical_frame" and la.aligned[0].width > 100
+
+
+def test_bad_clouds_are_counted_and_the_next_good_one_is_answered(model):
+    rng = np.random.default_rng(1)
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=[
+            Parameter("sensor_at_origin", value=False), Parameter("qos_reliability", value="reliable"),
+            Parameter("qos_depth", value=10)])
+        client = rclpy_node(ctx)
+        listen = Listener(client, "/segmented_object")
+        pub = client.create_publisher(PointCloud2, "/segmented_object", QoSProfile(depth=10))
+        good, _ = _posed(model, model.gallery_ids[7], rng)
+        no_z = xyz_to_pointcloud2(good, _header(1))
+        no_z.fields = [f for f in no_z.fields if f.name != "z"]
+        truncated = xyz_to_pointcloud2(good, _header(2))
+        truncated.data = bytes(truncated.data)[:100]
+        with spinning(ctx, node, client):
+            assert wait_for(lambda: pub.get_subscription_count(), 10)
+            stats = node.stats["segmented_object"]
+            for k, msg in enumerate((no_z, truncated, xyz_to_pointcloud2(good[:5], _header(3)),
+                                     xyz_to_pointcloud2(np.full((50, 3), np.nan), _header(4)))):
+                pub.publish(msg)
+                # one at a time, so none is dropped as stale and each is counted under its reason
+                assert wait_for(lambda: stats.counts["rejected"] == k + 1, 20)
+            pub.publish(xyz_to_pointcloud2(good, _header(5)))
+            assert wait_for(lambda: listen.poses, 60)
+        snap = node.stats["segmented_object"].snapshot()
+        assert listen.poses[-1].header.stamp.sec == 5
+        assert snap["rejected"] == 4 and snap["answered"] == 1 and snap["received"] == 5
+        assert {k: v for k, v in snap.items() if k.startswith("rejected_")} == {
+            "rejected_missing_field": 1, "rejected_truncated_data": 1, "rejected_too_few_points": 1,
+            "rejected_no_finite_points": 1}
+
+
+def test_parameters_are_validated_at_runtime(model):
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx)
+        bad = node.set_parameters([Parameter("n_candidates", value=0)])[0]
+        assert not bad.successful
+        bad = node.set_parameters([Parameter("min_points", value=5000)])[0]
+        assert not bad.successful and "min_points" in bad.reason
+        ok = node.set_parameters([Parameter("min_score", value=0.25)])[0]
+        assert ok.successful and model.min_score == 0.25
+        ro = node.set_parameters([Parameter("model_path", value="/elsewhere")])[0]
+        assert not ro.successful
+        node.destroy_node()
+
+
+def rclpy_node(ctx):
+    import rclpy
+    return rclpy.create_node("pcrp_test_client", context=ctx)
