@@ -5,9 +5,15 @@ import numpy as np
 
 
 class Gallery:
-    def __init__(self, ids, categories, clouds, vectors: np.ndarray):
-        if not (len(ids) == len(categories) == len(clouds) == len(vectors)):
+    def __init__(self, ids, categories, clouds, vectors: np.ndarray, owners: np.ndarray | None = None):
+        """vectors: one per object, then optionally more per object (descriptors of one-sided
+        views), owners[i] naming the object of vectors[i]."""
+        owners = np.arange(len(ids)) if owners is None else np.asarray(owners, dtype=np.int64)
+        if not (len(ids) == len(categories) == len(clouds)) or len(owners) != len(vectors):
             raise ValueError("gallery ids, categories, clouds and vectors differ in length")
+        if len(owners) and (owners.min() < 0 or owners.max() >= len(ids)):
+            raise ValueError("gallery vector owners out of range")
+        self.owners = owners
         if len(set(ids)) != len(ids):
             raise ValueError("gallery IDs must be unique")
         self.ids = list(ids)
@@ -21,22 +27,25 @@ class Gallery:
         return len(self.ids)
 
     def search(self, vector: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """Indices and Euclidean distances of the k nearest stored vectors, nearest first.
+        """Indices and Euclidean distances of the k nearest objects (by their nearest stored
+        vector), nearest first.
 
         Brute force: a matrix-vector product over even 10,000 objects costs well under a
         millisecond-scale budget, and is exact.
         """
         k = max(1, min(k, len(self)))
         d2 = np.maximum(self._sq - 2.0 * self.vectors @ vector + float(vector @ vector), 0.0)
-        idx = np.argpartition(d2, k - 1)[:k]
+        per_object = np.full(len(self), np.inf)
+        np.minimum.at(per_object, self.owners, d2)
+        idx = np.argpartition(per_object, k - 1)[:k]
         # exact distances for the few kept: the expanded form above cancels badly near zero
-        dist = np.linalg.norm(self.vectors[idx] - vector, axis=1)
+        dist = np.array([np.linalg.norm(self.vectors[self.owners == i] - vector, axis=1).min() for i in idx])
         order = np.argsort(dist, kind="stable")
         return idx[order], dist[order]
 
     def to_arrays(self) -> dict:
         lengths = np.array([len(c) for c in self.clouds], dtype=np.int64)
-        return {"gallery_vectors": self.vectors,
+        return {"gallery_vectors": self.vectors, "gallery_vector_owners": self.owners,
                 "gallery_points": np.concatenate(self.clouds) if self.clouds else np.zeros((0, 3), np.float32),
                 "gallery_lengths": lengths}
 
@@ -46,4 +55,4 @@ class Gallery:
         if len(ends) != len(ids) or (len(ends) and ends[-1] != len(arrays["gallery_points"])):
             raise ValueError("gallery clouds do not match the gallery IDs")
         clouds = np.split(arrays["gallery_points"], ends[:-1]) if len(ends) else []
-        return cls(ids, categories, clouds, arrays["gallery_vectors"])
+        return cls(ids, categories, clouds, arrays["gallery_vectors"], arrays["gallery_vector_owners"])

@@ -23,6 +23,7 @@ from pcrp_core.gallery import Gallery
 from pcrp_core.pose import PoseOptions, Prepared, Registrar, prepare, shape_distance
 from pcrp_core.preprocess import check_geometry, downsample, finite_points
 from pcrp_core.result import PoseResult
+from pcrp_core.visibility import visible_from
 from pcrp_core.vlad import VLAD
 
 DEFAULT_MODEL = Path(__file__).parent / "data" / "default_model"
@@ -32,6 +33,15 @@ SCALE_MODES = ("metric", "normalize")
 def default_model_path() -> Path:
     """The small model shipped with the package, built from the procedural generator."""
     return DEFAULT_MODEL
+
+
+def _view_directions(n: int) -> np.ndarray:
+    """n unit vectors spread evenly over the sphere (Fibonacci lattice)."""
+    k = np.arange(n) + 0.5
+    z = 1 - 2 * k / n
+    phi = np.pi * (1 + 5 ** 0.5) * k
+    r = np.sqrt(1 - z ** 2)
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
 
 
 def _rms_radius(points: np.ndarray) -> float:
@@ -120,12 +130,15 @@ class PCRP:
     @classmethod
     def build(cls, objects, *, hop1: str = "fpfh", n_clusters: int = 10, aggregation: str = "vlad",
               n_points: int = 1024, fit_clouds: int = 400, energy_threshold1: float = 1e-3,
-              energy_threshold2: float = 5e-4, seed: int = 0, sources=(), progress=None) -> "PCRP":
+              energy_threshold2: float = 5e-4, views: int = 0, seed: int = 0, sources=(),
+              progress=None) -> "PCRP":
         """Fit FR-PointHop and the VLAD codebook on the gallery, then describe every object.
 
         objects: GalleryObject-like items (gallery_id, category, points), pre-aligned.
         fit_clouds bounds how many objects the Saab kernels are fitted on (PCA needs far
-        fewer samples than a large gallery has); progress wraps iterables (e.g. tqdm).
+        fewer samples than a large gallery has); views adds, per object, the descriptors of that
+        many one-sided views (what a depth camera sees from evenly spread directions), so that
+        one-sided queries find their object; progress wraps iterables (e.g. tqdm).
         """
         objects = list(objects)
         if not objects:
@@ -143,10 +156,17 @@ class PCRP:
         vlad = VLAD(n_clusters=n_clusters, aggregation=aggregation, random_state=seed)
         if aggregation == "vlad":
             vlad.fit(np.concatenate(feats))
-        vectors = np.stack([vlad.transform(f) for f in feats])
+        vectors = [vlad.transform(f) for f in feats]
+        owners = list(range(len(objects)))
+        for i, c in enumerate(wrap(normed, desc="views", unit="obj") if views else ()):
+            for cam in _view_directions(views) * 3.0:
+                seen = c[visible_from(c, cam)]
+                if len(seen) >= 64:
+                    vectors.append(vlad.transform(pointhop.transform(seen, cam)[1]))
+                    owners.append(i)
         gallery = Gallery([o.gallery_id for o in objects], [o.category for o in objects],
-                          [c.astype(np.float32) for c in clouds], vectors)
-        meta = {"sources": list(sources), "n_objects": len(objects), "n_points": n_points,
+                          [c.astype(np.float32) for c in clouds], np.stack(vectors), np.array(owners))
+        meta = {"sources": list(sources), "n_objects": len(objects), "n_points": n_points, "views": views,
                 "feature_dim": int(pointhop.n_features_), "built": time.strftime("%Y-%m-%dT%H:%M:%S")}
         return cls(pointhop, vlad, gallery, unit, meta, n_points)
 

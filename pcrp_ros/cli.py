@@ -2,10 +2,11 @@
 import sys
 
 from pcrp_core import cli as core_cli
+from pcrp_ros import bag_commands
 
 
 def main(argv=None):
-    parser = core_cli.build_parser()
+    parser = core_cli.build_parser(extensions=[bag_commands.register])
     return core_cli.run(parser, argv)
 
 

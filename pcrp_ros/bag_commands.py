@@ -1,0 +1,237 @@
+"""`pcrp make-bag | process | replay | demo`: the rosbag side of the command line."""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+DEMO_BAG = Path(__file__).resolve().parents[1] / "pcrp_core" / "data" / "demo_bag"
+START_NS = 1_700_000_000 * 10**9   # bags start at a fixed time so they are reproducible
+
+
+def _rotation_error(R_est, R_true) -> float:
+    c = (np.trace(np.asarray(R_est).T @ np.asarray(R_true)) - 1) / 2
+    return float(np.degrees(np.arccos(np.clip(c, -1, 1))))
+
+
+# -- make-bag ---------------------------------------------------------------------------------------
+def make_bag(out, source="procedural:20", split="train", count=30, rate=5.0, topic="segmented_object",
+             seed=0, partial=True, noise=0.003, frame="camera_optical_frame", storage="sqlite3") -> int:
+    from pcrp_core.sources import load_source
+    from pcrp_core.sources.views import random_rotation, sensor_view
+    from pcrp_ros.bags import BagWriter, cloud_msg, header, T
+
+    objects = load_source(source, split=split)
+    rng = np.random.default_rng(seed)
+    order = rng.permutation(len(objects))
+    with BagWriter(out, storage) as bag:
+        for k in range(count):
+            obj = objects[order[k % len(objects)]]
+            R = random_rotation(rng)
+            # in front of the camera (optical frame: z forward), about three object radii away
+            radius = float(np.linalg.norm(obj.points - obj.points.mean(0), axis=1).max())
+            t = np.array([rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(2.5, 3.5)]) * radius
+            pts = obj.points.astype(np.float64) @ R.T + t
+            if partial:
+                pts = sensor_view(pts, np.zeros(3), rng, noise * radius)
+            ts = START_NS + int(k * 1e9 / rate)
+            sec, nsec = divmod(ts, 10**9)
+            bag.write(topic, cloud_msg(pts, header(sec, nsec, frame)), ts)
+            gt = {"stamp": [sec, nsec], "gallery_id": obj.gallery_id, "category": obj.category,
+                  "rotation": R.tolist(), "translation": t.tolist()}
+            bag.write(f"{topic}/ground_truth", T["std_msgs/msg/String"](data=json.dumps(gt)), ts)
+    return count
+
+
+def register_make_bag(sub) -> None:
+    p = sub.add_parser("make-bag", help="write a rosbag2 of segmented-object clouds with ground truth")
+    p.add_argument("--out", required=True, help="bag directory to create")
+    p.add_argument("--source", default="procedural:20", help="procedural[:N] or a ModelNet40 archive (default procedural:20)")
+    p.add_argument("--split", default="train", choices=["train", "test"],
+                   help="train: the gallery's own objects (IDs checkable); test: unseen objects")
+    p.add_argument("--count", type=int, default=30)
+    p.add_argument("--rate", type=float, default=5.0, help="clouds per second")
+    p.add_argument("--topic", default="segmented_object")
+    p.add_argument("--frame", default="camera_optical_frame")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--full", action="store_true", help="complete objects instead of one-sided depth-camera views")
+    p.add_argument("--noise", type=float, default=0.003, help="range noise, in object radii (default 0.003)")
+    p.add_argument("--storage", default="sqlite3", choices=["sqlite3", "mcap"])
+    p.set_defaults(func=lambda a: print(f"wrote {make_bag(a.out, a.source, a.split, a.count, a.rate, a.topic, a.seed, not a.full, a.noise, a.frame, a.storage)} clouds to {a.out}") or 0)
+
+
+# -- process ----------------------------------------------------------------------------------------
+def process_bag(bag, out, model, sensor_at_origin=True, quiet=False):
+    """Run the core over every cloud of a bag; write the node's outputs into `out`; return rows."""
+    from pcrp_core import InvalidCloud
+    from pcrp_ros.bags import BagWriter, cloud_msg, pose_msg, read_bag, T
+    from pcrp_ros.conversions import aligned_points
+
+    clouds, truths, problems = read_bag(bag)
+    for p in problems:
+        print(f"pcrp: {bag}: {p}", file=sys.stderr)
+    rows = []
+    with BagWriter(out) as writer:
+        for c in clouds:
+            hdr = c["msg"].header
+            row = {"topic": c["topic"], "stamp": f"{hdr.stamp.sec}.{hdr.stamp.nanosec:09d}"}
+            gt = truths.get((c["topic"], hdr.stamp.sec, hdr.stamp.nanosec))
+            if c["error"] is not None:
+                row.update(status=f"rejected: {c['error'].reason}")
+            else:
+                try:
+                    t0 = time.perf_counter()
+                    r = model.estimate(c["points"], viewpoint=np.zeros(3) if sensor_at_origin else None)
+                    row["latency_ms"] = 1e3 * (time.perf_counter() - t0)
+                except InvalidCloud as e:
+                    r, row["status"] = None, f"rejected: {e.reason}"
+                if r is not None:
+                    row.update(status="rejected: low_score" if r.rejected else "ok", gallery_id=r.gallery_id,
+                               category=r.category, score=r.score)
+                    if not r.rejected:
+                        writer.write(f"{c['topic']}/pose", pose_msg(r, hdr), c["timestamp"])
+                        writer.write(f"{c['topic']}/gallery_id", T["std_msgs/msg/String"](data=r.gallery_id), c["timestamp"])
+                        writer.write(f"{c['topic']}/aligned_model",
+                                     cloud_msg(aligned_points(r, model.gallery_cloud(r.gallery_id)), hdr), c["timestamp"])
+                    if gt:
+                        row["rot_err"] = _rotation_error(r.rotation, gt["rotation"])
+            if gt:
+                row.update(true_id=gt["gallery_id"], true_category=gt["category"])
+            rows.append(row)
+            if not quiet:
+                print(format_row(row), flush=True)
+    return rows
+
+
+def format_row(row) -> str:
+    err = f"{row['rot_err']:7.1f}" if "rot_err" in row else "      -"
+    lat = f"{row['latency_ms']:7.0f}" if "latency_ms" in row else "      -"
+    return (f"{row['topic'][:22]:22s} {row['stamp']:>21s} {row.get('true_id', '-')[:18]:18s} "
+            f"{row.get('gallery_id', '-')[:18]:18s} {err} {lat}  {row.get('status', '')}")
+
+
+HEADER = f"{'topic':22s} {'stamp':>21s} {'true id':18s} {'retrieved id':18s} {'rot err':>7s} {'lat ms':>7s}  status"
+
+
+def summary(rows) -> str:
+    n = len(rows)
+    ok = [r for r in rows if r.get("status") == "ok"]
+    lines = [f"clouds {n}, answered {len(ok)}, rejected {n - len(ok)}"]
+    reasons = {}
+    for r in rows:
+        if r.get("status", "").startswith("rejected"):
+            reasons[r["status"]] = reasons.get(r["status"], 0) + 1
+    lines += [f"  {k}: {v}" for k, v in sorted(reasons.items())]
+    lat = [r["latency_ms"] for r in rows if "latency_ms" in r]
+    if lat:
+        lines.append(f"latency ms: median {np.median(lat):.0f}, 95th percentile {np.percentile(lat, 95):.0f}")
+    withgt = [r for r in ok if "true_id" in r]
+    if withgt:
+        err = np.array([r["rot_err"] for r in withgt])
+        lines.append(f"accuracy on answered clouds ({len(withgt)}): category {np.mean([r['category'] == r['true_category'] for r in withgt]):.0%}, "
+                     f"gallery ID {np.mean([r['gallery_id'] == r['true_id'] for r in withgt]):.0%}, rotation error "
+                     f"mean {err.mean():.1f} deg, median {np.median(err):.1f} deg, under 10 deg {np.mean(err < 10):.0%}")
+    return "\n".join(lines)
+
+
+def register_process(sub) -> None:
+    p = sub.add_parser("process", help="run PCRP over a bag offline and write the node's outputs to a new bag")
+    p.add_argument("bag")
+    p.add_argument("--out", required=True, help="results bag directory to create")
+    p.add_argument("--model", default=None, help="model directory (default: the shipped model)")
+    p.add_argument("--complete-objects", action="store_true",
+                   help="clouds are complete objects, not one sensor's view from the frame origin")
+    p.set_defaults(func=_process)
+
+
+def _process(args) -> int:
+    from pcrp_core import ModelError, PCRP
+
+    try:
+        model = PCRP.load(args.model)
+    except ModelError as e:
+        print(f"pcrp: error: {e}", file=sys.stderr)
+        return 2
+    print(HEADER)
+    rows = process_bag(args.bag, args.out, model, sensor_at_origin=not args.complete_objects)
+    print(summary(rows))
+    return 0
+
+
+# -- replay and demo ----------------------------------------------------------------------------------
+def replay(node, bag, rate_factor=1.0, restamp=True, topics=None, on_publish=None):
+    """Publish a bag's clouds from `node` at the recorded rate (times rate_factor). With restamp,
+    each header gets the current time (so ages and latencies are live); on_publish(cloud, msg)
+    is told each cloud sent. Returns the number of clouds published."""
+    from rclpy.qos import qos_profile_sensor_data
+    from sensor_msgs.msg import PointCloud2, PointField
+    from std_msgs.msg import Header
+    from pcrp_ros.bags import read_bag
+
+    clouds, _, problems = read_bag(bag, topics)
+    for p in problems:
+        print(f"pcrp: {bag}: {p}", file=sys.stderr)
+    pubs = {t: node.create_publisher(PointCloud2, t, qos_profile_sensor_data) for t in {c["topic"] for c in clouds}}
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline and not all(p.get_subscription_count() for p in pubs.values()):
+        time.sleep(0.05)
+    t0_bag, t0 = (clouds[0]["timestamp"] if clouds else 0), time.monotonic()
+    for c in clouds:
+        delay = (c["timestamp"] - t0_bag) * 1e-9 / rate_factor - (time.monotonic() - t0)
+        if delay > 0:
+            time.sleep(delay)
+        src = c["msg"]
+        msg = PointCloud2(height=src.height, width=src.width, is_bigendian=src.is_bigendian,
+                          point_step=src.point_step, row_step=src.row_step, is_dense=src.is_dense,
+                          fields=[PointField(name=f.name, offset=f.offset, datatype=f.datatype, count=f.count) for f in src.fields],
+                          data=bytes(src.data))
+        msg.header = Header(frame_id=src.header.frame_id)
+        if restamp:
+            msg.header.stamp = node.get_clock().now().to_msg()
+        else:
+            msg.header.stamp.sec, msg.header.stamp.nanosec = src.header.stamp.sec, src.header.stamp.nanosec
+        if on_publish:
+            on_publish(c, msg)
+        pubs[c["topic"]].publish(msg)
+    return len(clouds)
+
+
+def register_replay(sub) -> None:
+    p = sub.add_parser("replay", help="publish a bag's clouds to the live node at the recorded rate")
+    p.add_argument("bag")
+    p.add_argument("--rate-factor", type=float, default=1.0, help="2.0 plays twice as fast")
+    p.add_argument("--topics", nargs="*", default=None)
+    p.add_argument("--keep-stamps", action="store_true", help="publish the recorded stamps instead of the current time")
+    p.set_defaults(func=_replay)
+
+
+def _replay(args) -> int:
+    import rclpy
+
+    rclpy.init()
+    node = rclpy.create_node("pcrp_replay")
+    try:
+        n = replay(node, args.bag, args.rate_factor, not args.keep_stamps, args.topics)
+        print(f"published {n} clouds from {args.bag}")
+    except KeyboardInterrupt:
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+def register_demo(sub) -> None:
+    p = sub.add_parser("demo", help="the node answering the shipped demo bag, live over DDS")
+    p.add_argument("--model", default=None, help="model directory (default: the shipped model)")
+    p.add_argument("--bag", default=str(DEMO_BAG))
+    p.add_argument("--rate-factor", type=float, default=1.0)
+    p.set_defaults(func=lambda a: __import__("pcrp_ros.demo", fromlist=["run"]).run(a.model, a.bag, a.rate_factor))
+
+
+def register(sub) -> None:
+    for r in (register_make_bag, register_process, register_replay, register_demo):
+        r(sub)

@@ -1,0 +1,90 @@
+"""`make demo`: the node with the shipped model answers the shipped bag, live over DDS."""
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+
+
+def run(model_path=None, bag=None, rate_factor=1.0) -> int:
+    import rclpy
+    from geometry_msgs.msg import PoseStamped
+    from rclpy.executors import MultiThreadedExecutor
+    from rclpy.parameter import Parameter
+    from scipy.spatial.transform import Rotation
+    from std_msgs.msg import String
+
+    from pcrp_core import PCRP
+    from pcrp_ros.bag_commands import DEMO_BAG, HEADER, format_row, replay, summary
+    from pcrp_ros.bags import read_bag
+    from pcrp_ros.node import PcrpNode
+
+    bag = bag or str(DEMO_BAG)
+    _, truths, _ = read_bag(bag)
+    rclpy.init()
+    node = PcrpNode(model=PCRP.load(model_path), parameter_overrides=[Parameter("sensor_at_origin", value=True)])
+    client = rclpy.create_node("pcrp_demo")
+    sent, rows, lock = {}, [], threading.Lock()
+    poses, ids = [], []
+
+    def pair():
+        # pose and ID of one cloud are published together, one of each, in order: pair by arrival
+        while poses and ids:
+            msg, gid = poses.pop(0), ids.pop(0)
+            key = (msg.header.stamp.sec, msg.header.stamp.nanosec)
+            if key not in sent:
+                continue
+            cloud, t_sent = sent[key]
+            gt = truths.get((cloud["topic"], cloud["msg"].header.stamp.sec, cloud["msg"].header.stamp.nanosec), {})
+            q = msg.pose.orientation
+            R = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
+            row = {"topic": cloud["topic"], "stamp": f"{key[0]}.{key[1]:09d}", "status": "ok",
+                   "latency_ms": 1e3 * (time.monotonic() - t_sent), "gallery_id": gid,
+                   "category": node.model.category_of(gid)}
+            if gt:
+                err = np.degrees(np.arccos(np.clip((np.trace(R.T @ np.array(gt["rotation"])) - 1) / 2, -1, 1)))
+                row.update(true_id=gt["gallery_id"], true_category=gt["category"], rot_err=float(err))
+            rows.append(row)
+            print(format_row(row), flush=True)
+
+    def on_pose(msg: PoseStamped):
+        with lock:
+            poses.append(msg)
+            pair()
+
+    def on_id(msg: String):
+        with lock:
+            ids.append(msg.data)
+            pair()
+
+    client.create_subscription(String, "/segmented_object/gallery_id", on_id, 10)
+    client.create_subscription(PoseStamped, "/segmented_object/pose", on_pose, 10)
+    ex = MultiThreadedExecutor(num_threads=3)
+    ex.add_node(node)
+    ex.add_node(client)
+    spin = threading.Thread(target=ex.spin, daemon=True)
+    spin.start()
+    print(HEADER, flush=True)
+
+    def on_publish(cloud, msg):
+        with lock:
+            sent[(msg.header.stamp.sec, msg.header.stamp.nanosec)] = (cloud, time.monotonic())
+    try:
+        n = replay(client, bag, rate_factor, True, None, on_publish)
+        end = time.monotonic() + 30.0
+        while time.monotonic() < end and node.stats["segmented_object"].snapshot().get("answered", 0) \
+                + node.stats["segmented_object"].snapshot().get("rejected", 0) \
+                + node.stats["segmented_object"].snapshot().get("dropped_stale", 0) < n:
+            time.sleep(0.1)
+        time.sleep(0.5)
+    finally:
+        snap = node.stats["segmented_object"].snapshot()
+        ex.shutdown(timeout_sec=2.0)
+        node.destroy_node()
+        client.destroy_node()
+        rclpy.try_shutdown()
+    print(f"\nnode: received {snap.get('received', 0)}, answered {snap.get('answered', 0)}, "
+          f"rejected {snap.get('rejected', 0)}, dropped as stale {snap.get('dropped_stale', 0)}")
+    print(summary(rows))
+    return 0
