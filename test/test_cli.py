@@ -1,0 +1,37 @@
+"""The command line as a user types it."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+
+
+def pcrp(*args):
+    return subprocess.run([sys.executable, "-m", "pcrp_ros.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+def test_build_a_gallery_then_query_a_cloud_file(tmp_path):
+    model = tmp_path / "model"
+    built = pcrp("build", "procedural:4", "--out", str(model))
+    assert built.returncode == 0, built.stderr
+    assert "16 objects" in built.stdout and "MB on disk" in built.stdout
+    from pcrp_core.sources.procedural import generate_object
+    from scipy.spatial.transform import Rotation
+    R = Rotation.from_euler("zyx", [40, -20, 70], degrees=True).as_matrix()
+    cloud = tmp_path / "chair.npy"
+    np.save(cloud, generate_object("chair", 2).astype(np.float64) @ R.T + [1.0, 2.0, 3.0])
+    out = pcrp("query", str(model), str(cloud), "--json")
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result["gallery_id"] == "proc_chair_0002" and result["category"] == "chair"
+    np.testing.assert_allclose(np.array(result["rotation"]), R, atol=0.02)
+    np.testing.assert_allclose(result["translation"], [1.0, 2.0, 3.0], atol=0.02)
+    text = pcrp("query", str(model), str(cloud))
+    assert "gallery_id  proc_chair_0002" in text.stdout and "quaternion" in text.stdout
+
+
+def test_a_missing_model_or_cloud_fails_with_one_clear_line(tmp_path):
+    out = pcrp("query", str(tmp_path / "nope"), str(tmp_path / "x.npy"))
+    assert out.returncode == 2 and "no such model" in out.stderr and "Traceback" not in out.stderr
+    out = pcrp("query", "default", str(tmp_path / "x.npy"))
+    assert out.returncode == 2 and "x.npy" in out.stderr and "Traceback" not in out.stderr

@@ -1,0 +1,68 @@
+"""Where objects come from: the generator, ModelNet archives, the user's folders, sensor views."""
+import numpy as np
+import open3d as o3d
+import pytest
+from scipy.spatial import cKDTree
+
+from helpers import MODELNET
+from pcrp_core.sources import load_source, load_sources
+from pcrp_core.sources.procedural import CATEGORIES, generate_object
+from pcrp_core.sources.views import crop_half_plane, partial_view, random_rotation, sensor_view
+
+
+@pytest.mark.parametrize("category", CATEGORIES)
+def test_generated_objects_are_deterministic_varied_normalised_and_have_a_front(category):
+    a, b, other = generate_object(category, 3), generate_object(category, 3), generate_object(category, 4)
+    np.testing.assert_array_equal(a, b)
+    assert cKDTree(other).query(a)[0].mean() > 0.02
+    np.testing.assert_allclose(a.mean(0), 0, atol=1e-5)
+    assert np.linalg.norm(a, axis=1).max() == pytest.approx(1.0, abs=1e-5)
+    turned = a * [-1, -1, 1]   # half turn about z: a pose must be told from this
+    assert cKDTree(a).query(turned)[0].mean() > 0.03
+
+
+def test_procedural_train_and_test_splits_differ_and_ids_are_unique():
+    train, test = load_source("procedural:3"), load_source("procedural:3", split="test")
+    assert len(train) == 12 and {o.category for o in train} == set(CATEGORIES)
+    assert not {o.gallery_id for o in train} & {o.gallery_id for o in test}
+    with pytest.raises(ValueError, match="twice"):
+        load_sources(["procedural:2", "procedural:2"])
+
+
+@pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")
+def test_modelnet_archives_give_official_names_and_the_category():
+    objs = load_source(str(MODELNET / "sofa.npz"), split="test", limit_per_category=3)
+    assert [o.gallery_id for o in objs][0].startswith("sofa_") and {o.category for o in objs} == {"sofa"}
+    assert objs[0].points.shape == (1024, 3) and objs[0].points.dtype == np.float32
+
+
+def test_folders_of_meshes_and_clouds_load_and_broken_files_are_skipped(tmp_path, caplog):
+    (tmp_path / "box").mkdir()
+    (tmp_path / "ball").mkdir()
+    mesh = o3d.geometry.TriangleMesh.create_box(2.0, 1.0, 0.5)
+    o3d.io.write_triangle_mesh(str(tmp_path / "box" / "crate.obj"), mesh)
+    np.save(tmp_path / "ball" / "b1.npy", np.random.default_rng(0).normal(size=(500, 3)))
+    (tmp_path / "ball" / "broken.ply").write_text("not a ply")
+    objs = load_source(str(tmp_path), n_points=300)
+    ids = sorted(o.gallery_id for o in objs)
+    assert ids == ["ball/b1", "box/crate"]
+    crate = next(o for o in objs if o.gallery_id == "box/crate")
+    assert crate.points.shape == (300, 3) and crate.points[:, 0].max() == pytest.approx(2.0, abs=1e-3)
+    assert "broken.ply" in caplog.text
+    with pytest.raises(ValueError, match="not a ModelNet40 archive"):
+        load_source(str(tmp_path / "nothing_here"))
+
+
+def test_a_sensor_sees_one_side_with_noise_along_its_rays():
+    rng = np.random.default_rng(1)
+    p = generate_object("car", 0).astype(np.float64) + [0, 0, 3.0]
+    seen = sensor_view(p, np.zeros(3), rng, noise_sigma=0.0)
+    assert 0.15 * len(p) < len(seen) < 0.8 * len(p)
+    assert seen[:, 2].mean() < p[:, 2].mean()         # the near side
+    noisy = partial_view(p, np.random.default_rng(2), noise_sigma=0.01)
+    again = partial_view(p, np.random.default_rng(2), noise_sigma=0.01)
+    np.testing.assert_array_equal(noisy, again)
+    assert len(crop_half_plane(p, rng, keep=0.7)) == pytest.approx(0.7 * len(p), abs=2)
+    R = random_rotation(rng)
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(R) == pytest.approx(1.0)
