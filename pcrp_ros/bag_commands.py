@@ -166,7 +166,7 @@ def replay(node, bag, rate_factor=1.0, restamp=True, topics=None, on_publish=Non
     """Publish a bag's clouds from `node` at the recorded rate (times rate_factor). With restamp,
     each header gets the current time (so ages and latencies are live); on_publish(cloud, msg)
     is told each cloud sent. Returns the number of clouds published."""
-    from rclpy.qos import qos_profile_sensor_data
+    from rclpy.qos import QoSProfile
     from sensor_msgs.msg import PointCloud2, PointField
     from std_msgs.msg import Header
     from pcrp_ros.bags import read_bag
@@ -174,7 +174,8 @@ def replay(node, bag, rate_factor=1.0, restamp=True, topics=None, on_publish=Non
     clouds, _, problems = read_bag(bag, topics)
     for p in problems:
         print(f"pcrp: {bag}: {p}", file=sys.stderr)
-    pubs = {t: node.create_publisher(PointCloud2, t, qos_profile_sensor_data) for t in {c["topic"] for c in clouds}}
+    # reliable publishers match best-effort and reliable subscribers alike
+    pubs = {t: node.create_publisher(PointCloud2, t, QoSProfile(depth=10)) for t in {c["topic"] for c in clouds}}
     deadline = time.monotonic() + 5.0
     while time.monotonic() < deadline and not all(p.get_subscription_count() for p in pubs.values()):
         time.sleep(0.05)

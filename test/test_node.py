@@ -4,6 +4,7 @@ import pytest
 from rclpy.parameter import Parameter
 
 from rosutil import ros_context, spinning, wait_for  # noqa: F401 (sets ROS_DOMAIN_ID first)
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import PointCloud2, PointField
@@ -78,6 +79,8 @@ def test_bad_clouds_are_counted_and_the_next_good_one_is_answered(model):
             Parameter("qos_depth", value=10)])
         client = rclpy_node(ctx)
         listen = Listener(client, "/segmented_object")
+        diagnostics = []
+        client.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 10)
         pub = client.create_publisher(PointCloud2, "/segmented_object", QoSProfile(depth=10))
         good, _ = _posed(model, model.gallery_ids[7], rng)
         no_z = xyz_to_pointcloud2(good, _header(1))
@@ -94,6 +97,17 @@ def test_bad_clouds_are_counted_and_the_next_good_one_is_answered(model):
                 assert wait_for(lambda: stats.counts["rejected"] == k + 1, 20)
             pub.publish(xyz_to_pointcloud2(good, _header(5)))
             assert wait_for(lambda: listen.poses, 60)
+
+            def reported():
+                for arr in diagnostics:
+                    for status in arr.status:
+                        values = {kv.key: kv.value for kv in status.values}
+                        if status.name == "pcrp_node: segmented_object" and values.get("answered") == "1":
+                            return values
+            assert wait_for(reported, 5)
+        values = reported()
+        assert values["rejected_missing_field"] == "1" and values["received"] == "5"
+        assert float(values["latency_p50_ms"]) > 0 and "age_p95_ms" in values
         snap = node.stats["segmented_object"].snapshot()
         assert listen.poses[-1].header.stamp.sec == 5
         assert snap["rejected"] == 4 and snap["answered"] == 1 and snap["received"] == 5
@@ -119,3 +133,24 @@ def test_parameters_are_validated_at_runtime(model):
 def rclpy_node(ctx):
     import rclpy
     return rclpy.create_node("pcrp_test_client", context=ctx)
+
+
+def test_a_bag_replayed_to_the_node_is_answered_with_its_stamps(model, tmp_path):
+    from pcrp_ros.bag_commands import make_bag, replay
+
+    bag = tmp_path / "bag"
+    make_bag(bag, "procedural:20", count=3, rate=20, seed=5)
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx)   # default sensor-data QoS
+        client = rclpy_node(ctx)
+        listen = Listener(client, "/segmented_object")
+        sent = []
+        with spinning(ctx, node, client):
+            n = replay(client, bag, rate_factor=0.2, restamp=True,
+                       on_publish=lambda cloud, msg: sent.append((msg.header.stamp.sec, msg.header.stamp.nanosec)))
+            stats = node.stats["segmented_object"]
+            done = lambda: stats.counts["answered"] + stats.counts["rejected"] + stats.counts["dropped_stale"]  # noqa: E731
+            assert wait_for(lambda: done() == 3, 60)
+        assert n == 3 and len(sent) == 3 and stats.counts["received"] == 3
+        assert len(listen.poses) == stats.counts["answered"] >= 1
+        assert all((p.header.stamp.sec, p.header.stamp.nanosec) in sent for p in listen.poses)
