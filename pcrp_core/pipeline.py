@@ -20,7 +20,7 @@ from pcrp_core import model_io
 from pcrp_core.errors import InvalidCloud, ModelError
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
-from pcrp_core.pose import PoseOptions, Prepared, Registrar, prepare, shape_distance
+from pcrp_core.pose import PoseOptions, Prepared, Registrar, prepare
 from pcrp_core.preprocess import check_geometry, downsample, finite_points
 from pcrp_core.result import PoseResult
 from pcrp_core.visibility import visible_from
@@ -67,7 +67,6 @@ class PCRP:
         self.pose_options = PoseOptions()
         self.n_candidates = 8
         self.n_matched = 2
-        self.n_rerank = 0
         self.min_score = 0.5
         self.min_points = 32
         self.max_points = self.n_points
@@ -91,7 +90,6 @@ class PCRP:
         checks = {
             "n_candidates": lambda v: isinstance(v, int) and 1 <= v <= 50,
             "n_matched": lambda v: isinstance(v, int) and 1 <= v <= 50,
-            "n_rerank": lambda v: isinstance(v, int) and 0 <= v <= 500,
             "min_score": lambda v: isinstance(v, (int, float)) and 0.0 <= v <= 1.0,
             "refine": lambda v: isinstance(v, bool),
             "min_points": lambda v: isinstance(v, int) and 8 <= v,
@@ -254,41 +252,40 @@ class PCRP:
         timings = {}
         pts = self._clean(points)
         centre = pts.mean(0)
-        normed = (pts - centre) / self.unit
+        # size: how much the query is scaled before anything is computed on it (1 in metric mode;
+        # in normalize mode, to the gallery's typical size, then to the first candidate's)
+        size = 1.0
+        if self.scale_mode == "normalize":
+            size = float(np.median(self._radii)) / max(_rms_radius(pts), 1e-12)
+        normed = (pts - centre) * (size / self.unit)
         t1 = time.perf_counter()
         timings["preprocess"] = t1 - t0
         vp = self._viewpoint(viewpoint, centre)
+        vp = None if vp is None else vp * size
         sampled, feats, vec = self._describe(normed, vp)
         t2 = time.perf_counter()
         timings["features"] = t2 - t1
-        idx, dist = self.gallery.search(vec, max(10, self.n_candidates, self.n_rerank))
+        idx, dist = self.gallery.search(vec, max(10, self.n_candidates))
         t3 = time.perf_counter()
         timings["retrieval"] = t3 - t2
         rng = np.random.default_rng(self.seed)
         ratio = 1.0
         if self.scale_mode == "normalize":
-            # one size for the query: the first candidate's (the others are of its kind)
-            ratio = self._radii[idx[0]] / max(_rms_radius(pts), 1e-12)
+            ratio = self._radii[idx[0]] / float(np.median(self._radii))
         registrar = Registrar(prepare(normed * ratio, sampled, feats), self.pose_options, rng,
                               None if vp is None else vp * ratio)
-        top = [int(i) for i in idx[: max(self.n_candidates, self.n_rerank)]]
-        if self.n_rerank > self.n_candidates:
-            # verify more retrieved objects cheaply, register only the best-fitting few
-            cost = [shape_distance(registrar.query.points, registrar.src, self._prepared(i, False)) for i in top]
-            top = [top[n] for n in np.argsort(cost, kind="stable")]
-        top = top[: self.n_candidates]
-        t4 = time.perf_counter()
-        timings["rerank"] = t4 - t3
+        top = [int(i) for i in idx[: self.n_candidates]]
         matched = [self._prepared(i, features=True) for i in top[: self.n_matched]]
         verifiers = matched + [self._prepared(i, features=False) for i in top[self.n_matched:]]
         j, h = registrar.best_pose(matched, verifiers)
         i = top[j]
-        timings["registration"] = time.perf_counter() - t4
-        # g_n = R' (ratio q_n) + t'  with q_n = (q - centre)/unit, g_n = (g - c_g)/unit
-        # => q = (1/ratio) R'^T (g - c_g) - (unit/ratio) R'^T t' + centre
+        timings["registration"] = time.perf_counter() - t3
+        # g_n = R' (k q_n) + t'  with q_n = (q - centre)/unit, g_n = (g - c_g)/unit, k = size * ratio
+        # => q = (1/k) R'^T (g - c_g) - (unit/k) R'^T t' + centre
+        k = size * ratio
         c_g = self.gallery.clouds[i].astype(np.float64).mean(0)
         R = h.R.T
-        scale = 1.0 / ratio
+        scale = 1.0 / k
         t = centre - scale * (R @ (c_g + self.unit * h.t))
         score = h.fitness
         rejected = score < self.min_score
@@ -296,7 +293,7 @@ class PCRP:
         return PoseResult(
             gallery_id=self.gallery.ids[i], category=self.gallery.categories[i], rotation=R,
             translation=t, scale=scale, score=score, fitness=h.fitness,
-            inlier_rmse=h.rmse * self.unit / ratio, chamfer=h.chamfer, rejected=rejected,
+            inlier_rmse=h.rmse * self.unit / k, chamfer=h.chamfer, rejected=rejected,
             reason=f"fit score {score:.2f} below min_score {self.min_score:.2f}" if rejected else "",
             candidates=tuple((self.gallery.ids[j], float(d)) for j, d in zip(idx, dist)),
             timings=timings, n_points=len(pts))

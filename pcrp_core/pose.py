@@ -104,13 +104,6 @@ def _pca_seeds(q: np.ndarray, g: np.ndarray, src: np.ndarray, tree: cKDTree, kee
         yield Rs[n], ts[n], "pca"
 
 
-def shape_distance(query_points: np.ndarray, src: np.ndarray, gallery: Prepared) -> float:
-    """Cheap rotation-free dissimilarity: the best mean distance of the query to the gallery
-    object over the 24 principal-axis alignments, no refinement. Used to re-rank retrieved
-    candidates before the costly registration."""
-    return min(_pca_costs(query_points, gallery.points, src, gallery.tree)[2])
-
-
 def _pca_costs(q, g, src, tree):
     aq, ag = principal_axes(q), principal_axes(g)
     Rs = np.einsum("ji,njk,kl->nil", ag, AXIS_ROTATIONS, aq)    # ag.T @ M @ aq

@@ -1,0 +1,87 @@
+"""Whatever a segmenter sends: the core answers or refuses with a reason, never crashes;
+the node refuses to start on a bad model with one clear line."""
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from helpers import rotation_error_deg
+from pcrp_core import InvalidCloud, PCRP, default_model_path
+from pcrp_core.sources.procedural import generate_object
+
+
+@pytest.fixture(scope="module")
+def model():
+    return PCRP.load(default_model_path())
+
+
+def _answer_or_reason(model, cloud):
+    try:
+        return model.estimate(cloud)
+    except InvalidCloud as e:
+        assert e.reason in {"no_finite_points", "too_few_points", "degenerate", "bad_shape"}
+        return e.reason
+
+
+@pytest.mark.parametrize("name, cloud", [
+    ("plane", np.column_stack([np.random.default_rng(0).uniform(-1, 1, (800, 2)), np.zeros(800)])),
+    ("sphere", (lambda v: v / np.linalg.norm(v, axis=1, keepdims=True))(np.random.default_rng(1).normal(size=(800, 3)))),
+    ("cube", np.random.default_rng(2).uniform(-1, 1, (800, 3)).round(0) * 0.5 + np.random.default_rng(3).uniform(-0.5, 0.5, (800, 3)) * [1, 1, 0]),
+    ("duplicated points", np.repeat(generate_object("chair", 1)[:100].astype(float), 10, axis=0)),
+    ("two points repeated", np.repeat([[0.0, 0, 0], [1, 1, 1]], 400, axis=0)),
+])
+def test_degenerate_geometry_is_answered_or_refused(model, name, cloud):
+    out = _answer_or_reason(model, cloud)
+    assert isinstance(out, str) or np.isfinite(out.transform).all()
+
+
+def test_a_million_points_are_downsampled_and_answered_in_bounded_time(model):
+    rng = np.random.default_rng(4)
+    base = generate_object("sofa", 2, n_points=4096).astype(np.float64)
+    big = base[rng.integers(0, len(base), 1_000_000)] + rng.normal(scale=0.002, size=(1_000_000, 3))
+    t0 = time.perf_counter()
+    r = model.estimate(big)
+    assert time.perf_counter() - t0 < 20.0
+    assert r.n_points == model.max_points and r.category == "sofa"
+
+
+def test_far_from_the_origin_the_pose_is_still_right(model):
+    p = model.gallery_cloud("proc_chair_0003").astype(np.float64)
+    t = np.array([1000.0, -250.0, 30.0])
+    r = model.estimate(p + t)
+    assert r.gallery_id == "proc_chair_0003" and rotation_error_deg(r.rotation, np.eye(3)) < 1.0
+    np.testing.assert_allclose(r.translation, t, atol=0.01)
+
+
+def test_a_cloud_in_millimetres_is_answered_or_rejected_not_crashed(model):
+    out = _answer_or_reason(model, model.gallery_cloud("proc_car_0001").astype(np.float64) * 1000.0)
+    assert isinstance(out, str) or np.isfinite(out.transform).all()
+    model.set_options(scale_mode="normalize")
+    try:
+        r = model.estimate(model.gallery_cloud("proc_car_0001").astype(np.float64) * 1000.0)
+    finally:
+        model.set_options(scale_mode="metric")
+    assert r.gallery_id == "proc_car_0001" and r.scale == pytest.approx(1000.0, rel=0.01)
+
+
+@settings(max_examples=8, deadline=None)
+@given(rotvec=st.tuples(*[st.floats(-3.0, 3.0)] * 3), shift=st.tuples(*[st.floats(-5.0, 5.0)] * 3))
+def test_any_rotation_and_translation_of_a_gallery_object_gives_its_pose(model, rotvec, shift):
+    from scipy.spatial.transform import Rotation
+    R = Rotation.from_rotvec(rotvec).as_matrix()
+    p = model.gallery_cloud("proc_airplane_0004").astype(np.float64)
+    r = model.estimate(p @ R.T + shift)
+    assert r.gallery_id == "proc_airplane_0004"
+    assert rotation_error_deg(r.rotation, R) < 1.0
+    np.testing.assert_allclose(r.translation, shift, atol=0.01)
+
+
+@pytest.mark.parametrize("path, words", [("/no/such/model", "no such model"), (__file__, "not a file")])
+def test_the_node_stops_at_start_up_on_a_bad_model_with_one_clear_line(path, words):
+    out = subprocess.run([sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-p", f"model_path:={path}"],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 1
+    assert words in out.stderr and path in out.stderr and "Traceback" not in out.stderr
