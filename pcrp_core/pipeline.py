@@ -204,8 +204,16 @@ class PCRP:
         return model
 
     # -- querying -------------------------------------------------------------------------------
+    def prepare(self, points) -> np.ndarray:
+        """The cloud as estimate() will use it: finite, at most max_points, checked for geometry a
+        pose can be read from (raises InvalidCloud otherwise). Cheap; a stream can call it on
+        arrival, to refuse bad clouds at once and queue only usable ones."""
+        return self._clean(points)
+
     def _clean(self, points) -> np.ndarray:
         pts = finite_points(points)
+        if len(np.asarray(points).reshape(-1, 3)) == 0:
+            raise InvalidCloud("empty", "the cloud has no points")
         if len(pts) == 0:
             raise InvalidCloud("no_finite_points", "the cloud has no finite points")
         pts = downsample(pts, min(self.max_points, self.n_points), self.seed)

@@ -37,17 +37,35 @@ def farthest_point_sampling(points: np.ndarray, m: int) -> np.ndarray:
     return np.asarray(idx, dtype=np.int64)
 
 
+def merge_duplicates(points: np.ndarray, resolution: float = 0.005) -> np.ndarray:
+    """One point per cell of `resolution` times the cloud's RMS radius, first come first kept.
+
+    Repeated points (merged cameras, drivers that pad clouds) bias the normals and features,
+    and sampling then picks copies instead of surface. The cell is relative to the cloud's
+    own size, so this works in any unit and never thins a normally spaced cloud.
+    """
+    if len(points) < 2:
+        return points
+    radius = np.sqrt(((points - points.mean(axis=0)) ** 2).sum(axis=1).mean())
+    if radius <= 0:
+        return points[:1]
+    keys = np.floor((points - points.min(axis=0)) / (resolution * radius)).astype(np.int64)
+    _, first = np.unique(keys, axis=0, return_index=True)
+    return points[np.sort(first)]
+
+
 def downsample(points: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
-    """At most max_points points.
+    """At most max_points points, duplicates merged.
 
     A random subset first bounds the cost of huge clouds; farthest-point sampling then keeps
     coverage even, so dense regions near a camera do not dominate the features.
     """
-    if len(points) <= max_points:
-        return points
     rng = np.random.default_rng(seed)
     if len(points) > 8 * max_points:
         points = points[rng.choice(len(points), 8 * max_points, replace=False)]
+    points = merge_duplicates(points)
+    if len(points) <= max_points:
+        return points
     return points[farthest_point_sampling(points, max_points)]
 
 

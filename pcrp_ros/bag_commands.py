@@ -64,13 +64,14 @@ def register_make_bag(sub) -> None:
 
 
 # -- process ----------------------------------------------------------------------------------------
-def process_bag(bag, out, model, sensor_at_origin=True, quiet=False):
-    """Run the core over every cloud of a bag; write the node's outputs into `out`; return rows."""
+def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None):
+    """Run the core over every cloud of a bag (or of the given topics); write the node's outputs
+    into `out`; return rows. Unreadable clouds become rows with their reason, never a stop."""
     from pcrp_core import InvalidCloud
     from pcrp_ros.bags import BagWriter, cloud_msg, pose_msg, read_bag, T
     from pcrp_ros.conversions import aligned_points
 
-    clouds, truths, problems = read_bag(bag)
+    clouds, truths, problems = read_bag(bag, topics)
     for p in problems:
         print(f"pcrp: {bag}: {p}", file=sys.stderr)
     rows = []
@@ -88,6 +89,9 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False):
                     row["latency_ms"] = 1e3 * (time.perf_counter() - t0)
                 except InvalidCloud as e:
                     r, row["status"] = None, f"rejected: {e.reason}"
+                except Exception as e:  # as in the node: one cloud must not end the run
+                    r, row["status"] = None, "rejected: internal_error"
+                    print(f"pcrp: {bag}: {c['topic']} @ {row['stamp']}: {type(e).__name__}: {e}", file=sys.stderr)
                 if r is not None:
                     row.update(status="rejected: low_score" if r.rejected else "ok", gallery_id=r.gallery_id,
                                category=r.category, score=r.score)
@@ -144,6 +148,7 @@ def register_process(sub) -> None:
     p.add_argument("--model", default=None, help="model directory (default: the shipped model)")
     p.add_argument("--complete-objects", action="store_true",
                    help="clouds are complete objects, not one sensor's view from the frame origin")
+    p.add_argument("--topics", nargs="*", default=None, help="cloud topics to answer (default: every PointCloud2 topic)")
     p.set_defaults(func=_process)
 
 
@@ -156,9 +161,9 @@ def _process(args) -> int:
         print(f"pcrp: error: {e}", file=sys.stderr)
         return 2
     print(HEADER)
-    rows = process_bag(args.bag, args.out, model, sensor_at_origin=not args.complete_objects)
+    rows = process_bag(args.bag, args.out, model, sensor_at_origin=not args.complete_objects, topics=args.topics)
     print(summary(rows))
-    return 0
+    return 0 if rows else 1     # a partial read is reported above; nothing read at all is a failure
 
 
 # -- replay and demo ----------------------------------------------------------------------------------
@@ -214,15 +219,16 @@ def _replay(args) -> int:
 
     rclpy.init()
     node = rclpy.create_node("pcrp_replay")
+    n = 0
     try:
         n = replay(node, args.bag, args.rate_factor, not args.keep_stamps, args.topics)
         print(f"published {n} clouds from {args.bag}")
     except KeyboardInterrupt:
-        pass
+        return 0
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
-    return 0
+    return 0 if n else 1
 
 
 def register_demo(sub) -> None:

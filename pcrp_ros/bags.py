@@ -15,6 +15,7 @@ from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from pcrp_ros.conversions import CloudFormatError, pack_points, pointcloud2_to_xyz
+from pcrp_ros.mcap_salvage import salvage
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 CLOUD = "sensor_msgs/msg/PointCloud2"
@@ -67,35 +68,65 @@ class BagWriter:
         self._writer.write(self._conns[topic], timestamp_ns, TYPESTORE.serialize_cdr(msg, typ))
 
 
-def read_bag(path, topics=None):
-    """(clouds, truths, problems): clouds are dicts of topic, timestamp, header, points (or a
-    format error); truths map (topic, sec, nanosec) to ground truth; problems list what could
-    not be read. A damaged bag yields what was read before the damage."""
-    clouds, truths, problems = [], {}, []
+def _messages(path: Path, problems: list[str]):
+    """(topic, msgtype, timestamp, raw CDR) of the bag's messages. A bag rosbags cannot open
+    whole is read as far as it goes when it is MCAP (a recording cut short); an SQLite file
+    cut short cannot be read at all (its page count no longer matches)."""
     try:
-        with Reader(Path(path)) as reader:
-            conns = [c for c in reader.connections if c.msgtype in (CLOUD, STRING)]
-            other = sorted({c.topic for c in reader.connections} - {c.topic for c in conns})
+        with Reader(path) as reader:
+            types = {c.topic: c.msgtype for c in reader.connections}
+            other = sorted(t for t, m in types.items() if m not in (CLOUD, STRING) or
+                           (m == STRING and not t.endswith("/ground_truth")))
             if other:
                 problems.append(f"ignored topics of other types: {', '.join(other)}")
+            wanted = [c for c in reader.connections if c.topic not in other]
             try:
-                for conn, ts, raw in reader.messages(connections=conns):
-                    try:
-                        msg = TYPESTORE.deserialize_cdr(raw, conn.msgtype)
-                    except Exception as e:  # a damaged message: skip it, keep the rest
-                        problems.append(f"{conn.topic} @ {ts}: unreadable message ({type(e).__name__})")
-                        continue
-                    if conn.msgtype == STRING and conn.topic.endswith("/ground_truth"):
-                        gt = json.loads(msg.data)
-                        truths[(conn.topic[: -len("/ground_truth")], *gt["stamp"])] = gt
-                    elif conn.msgtype == CLOUD and (topics is None or conn.topic in topics):
-                        try:
-                            pts, err = pointcloud2_to_xyz(msg), None
-                        except CloudFormatError as e:
-                            pts, err = None, e
-                        clouds.append({"topic": conn.topic, "timestamp": ts, "msg": msg, "points": pts, "error": err})
+                for conn, ts, raw in reader.messages(connections=wanted):
+                    yield conn.topic, conn.msgtype, ts, raw
             except Exception as e:
                 problems.append(f"stopped reading early: {type(e).__name__}: {e}")
+            return
     except Exception as e:
         problems.append(f"cannot open bag: {type(e).__name__}: {e}")
+    files = sorted(path.glob("*.mcap")) if path.is_dir() else [path] if path.suffix == ".mcap" else []
+    for f in files:
+        n = 0
+        for topic, msgtype, ts, raw in salvage(f, problems):
+            n += 1
+            if msgtype == CLOUD or (msgtype == STRING and topic.endswith("/ground_truth")):
+                yield topic, msgtype, ts, raw
+        problems.append(f"{f.name}: salvaged {n} messages from the damaged file")
+
+
+def read_bag(path, topics=None):
+    """(clouds, truths, problems): clouds are dicts of topic, timestamp, msg, points (or a
+    format error); truths map (topic, sec, nanosec) to ground truth; problems list what could
+    not be read. A damaged bag yields what could be read of it."""
+    clouds, truths, problems = [], {}, []
+    skipped = {}
+    for topic, msgtype, ts, raw in _messages(Path(path), problems):
+        try:
+            msg = TYPESTORE.deserialize_cdr(raw, msgtype)
+        except Exception as e:  # a damaged message: skip it, keep the rest
+            problems.append(f"{topic} @ {ts}: unreadable message ({type(e).__name__})")
+            continue
+        if msgtype == STRING:
+            gt = json.loads(msg.data)
+            truths[(topic[: -len("/ground_truth")], *gt["stamp"])] = gt
+        elif topics is not None and topic not in topics:
+            skipped[topic] = skipped.get(topic, 0) + 1
+        else:
+            try:
+                pts, err = pointcloud2_to_xyz(msg, finite_only=False), None
+            except CloudFormatError as e:
+                pts, err = None, e
+            clouds.append({"topic": topic, "timestamp": ts, "msg": msg, "points": pts, "error": err})
+    if skipped:
+        problems.append("skipped clouds on topics not asked for: "
+                        + ", ".join(f"{t} ({n})" for t, n in sorted(skipped.items())))
+    absent = sorted(set(topics or ()) - {c["topic"] for c in clouds})
+    if absent:
+        problems.append(f"no clouds on the topics asked for: {', '.join(absent)}")
+    if not clouds and not absent:
+        problems.append("no PointCloud2 messages found")
     return clouds, truths, problems

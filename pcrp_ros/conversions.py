@@ -73,11 +73,12 @@ def _field_views(msg, names=("x", "y", "z")) -> list[np.ndarray]:
             for n, dt in zip(names, dtypes)]
 
 
-def pointcloud2_to_xyz(msg) -> np.ndarray:
-    """(N, 3) float64 array of the cloud's finite points, in row-major order, holes dropped."""
+def pointcloud2_to_xyz(msg, finite_only: bool = True) -> np.ndarray:
+    """(N, 3) float64 array of the cloud's points in row-major order; NaN/Inf holes dropped
+    unless finite_only is false (then the caller can tell an all-NaN cloud from an empty one)."""
     x, y, z = _field_views(msg)
     pts = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1).astype(np.float64)
-    return pts[np.isfinite(pts).all(axis=1)]
+    return pts[np.isfinite(pts).all(axis=1)] if finite_only else pts
 
 
 def pack_points(points, dtype=np.float32, extra_fields=None) -> tuple[list, int, bytes]:

@@ -3,7 +3,8 @@
 Per input topic T: T/pose (PoseStamped), T/gallery_id (String), T/aligned_model (PointCloud2)
 and, where vision_msgs is installed, T/detections (Detection3DArray); all carry the input's
 header unchanged. Clouds are answered newest-first by one worker thread, so a slow model drops
-stale clouds (counted) instead of queueing them.
+stale clouds (counted) instead of queueing them. Clouds are checked on arrival, so every
+unusable one is refused and counted under its reason however busy the worker is.
 """
 from __future__ import annotations
 
@@ -34,6 +35,9 @@ PARAMETERS = {
     "max_points": (1024, "Larger clouds are downsampled to this many points, never refused.", (64, 100000), False),
     "n_candidates": (8, "Retrieved gallery objects registered and voted on per cloud (1 = the paper).", (1, 50), False),
     "min_score": (0.5, "Fit score (share of points on the aligned model) below which a cloud is rejected.", (0.0, 1.0), False),
+    "scale_mode": ("metric", "metric: clouds are in the gallery's units (metres); normalize: clouds of unknown "
+                             "scale are resized to the gallery's, and the estimated scale is dropped from the pose.",
+                   None, False),
     "refine": (True, "Refine poses with ICP.", None, False),
     "publish_aligned_model": (True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.", None, False),
     "sensor_at_origin": (True, "The cloud's frame is the sensor's own (one-sided views seen from its origin); "
@@ -42,7 +46,7 @@ PARAMETERS = {
     "qos_depth": (2, "Input QoS queue depth.", (1, 100), True),
     "log_throttle_sec": (5.0, "Least seconds between two log lines of one kind.", (0.0, 3600.0), False),
 }
-MODEL_OPTIONS = ("min_points", "max_points", "n_candidates", "min_score", "refine")
+MODEL_OPTIONS = ("min_points", "max_points", "n_candidates", "min_score", "scale_mode", "refine")
 
 
 def _descriptor(name, default, description, bounds, read_only) -> ParameterDescriptor:
@@ -55,8 +59,8 @@ def _descriptor(name, default, description, bounds, read_only) -> ParameterDescr
 
 
 class PcrpNode(Node):
-    def __init__(self, model: PCRP | None = None, **kwargs):
-        super().__init__("pcrp_node", **kwargs)
+    def __init__(self, model: PCRP | None = None, node_name: str = "pcrp_node", **kwargs):
+        super().__init__(node_name, **kwargs)
         for name, (default, description, bounds, read_only) in PARAMETERS.items():
             self.declare_parameter(name, default, _descriptor(name, default, description, bounds, read_only))
         p = {name: self.get_parameter(name).value for name in PARAMETERS}
@@ -75,6 +79,7 @@ class PcrpNode(Node):
         self._slots: dict[str, tuple] = {}
         self._cv = threading.Condition()
         self._running = True
+        self._last_log: dict[tuple[str, str], float] = {}
         for topic in p["input_topics"]:
             sub = self.create_subscription(PointCloud2, topic, lambda msg, t=topic: self._on_cloud(t, msg), qos)
             resolved = sub.topic_name
@@ -107,11 +112,22 @@ class PcrpNode(Node):
 
     # -- receiving ------------------------------------------------------------------------------------
     def _on_cloud(self, topic: str, msg: PointCloud2) -> None:
+        """Refuse unreadable clouds at once (cheap) so every bad cloud is counted under its reason,
+        however busy the worker is; queue only usable ones, newest replacing any still waiting."""
+        received = time.monotonic()
         self.stats[topic].count("received")
+        try:
+            points = self.model.prepare(pointcloud2_to_xyz(msg, finite_only=False))
+        except (CloudFormatError, InvalidCloud) as e:
+            self._reject(topic, e.reason, str(e))
+            return
+        except Exception as e:   # nothing one message holds may take the subscription down
+            self._reject(topic, "internal_error", f"{type(e).__name__}: {e}")
+            return
         with self._cv:
             if topic in self._slots:
                 self.stats[topic].count("dropped_stale")
-            self._slots[topic] = (msg, time.monotonic())
+            self._slots[topic] = (msg.header, points, received)
             self._cv.notify()
 
     def _work(self) -> None:
@@ -121,39 +137,44 @@ class PcrpNode(Node):
                 if not self._running:
                     return
                 topic = next(iter(self._slots))     # oldest-waiting topic first: fair across topics
-                msg, received = self._slots.pop(topic)
+                header, points, received = self._slots.pop(topic)
             try:
-                self._answer(topic, msg, received)
+                self._answer(topic, header, points, received)
             except Exception as e:   # the stream must survive anything one cloud does
                 self._reject(topic, "internal_error", f"{type(e).__name__}: {e}")
 
     def _reject(self, topic: str, reason: str, message: str) -> None:
+        """Count, and log once per topic and reason per log_throttle_sec (rclpy's own throttle is
+        per call site, so one noisy reason would hide every other)."""
         self.stats[topic].count("rejected", reason)
-        self.get_logger().warn(f"{topic}: cloud rejected ({reason}): {message}",
-                               throttle_duration_sec=float(self.get_parameter("log_throttle_sec").value))
+        now = time.monotonic()
+        key = (topic, reason)
+        if now - self._last_log.get(key, -np.inf) >= float(self.get_parameter("log_throttle_sec").value):
+            self._last_log[key] = now
+            total = self.stats[topic].rejections[reason]
+            self.get_logger().warn(f"{topic}: cloud rejected ({reason}, {total} so far): {message}")
 
-    def _answer(self, topic: str, msg: PointCloud2, received: float) -> None:
+    def _answer(self, topic: str, header, points: np.ndarray, received: float) -> None:
+        viewpoint = np.zeros(3) if self.get_parameter("sensor_at_origin").value else None
         try:
-            points = pointcloud2_to_xyz(msg)
-            viewpoint = np.zeros(3) if self.get_parameter("sensor_at_origin").value else None
             result = self.model.estimate(points, viewpoint=viewpoint)
-        except (CloudFormatError, InvalidCloud) as e:
+        except InvalidCloud as e:
             self._reject(topic, e.reason, str(e))
             return
         if result.rejected:
             self._reject(topic, "low_score", result.reason)
             return
         pubs = self._pubs[topic]
-        pubs["pose"].publish(pose_stamped(result, msg.header))
+        pubs["pose"].publish(pose_stamped(result, header))
         pubs["gallery_id"].publish(String(data=result.gallery_id))
         if self.get_parameter("publish_aligned_model").value:
             cloud = aligned_points(result, self.model.gallery_cloud(result.gallery_id))
-            pubs["aligned_model"].publish(xyz_to_pointcloud2(cloud, msg.header))
+            pubs["aligned_model"].publish(xyz_to_pointcloud2(cloud, header))
         if "detections" in pubs:
-            det = detections_msg(result, msg.header)
+            det = detections_msg(result, header)
             if det is not None:
                 pubs["detections"].publish(det)
-        stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+        stamp = header.stamp.sec + 1e-9 * header.stamp.nanosec
         now = self.get_clock().now().nanoseconds * 1e-9
         self.stats[topic].timing(time.monotonic() - received, now - stamp)
         self.stats[topic].count("answered")
@@ -166,7 +187,7 @@ class PcrpNode(Node):
             snap = stats.snapshot()
             level = DiagnosticStatus.OK if snap.get("answered", 0) or not snap.get("received", 0) else DiagnosticStatus.WARN
             arr.status.append(DiagnosticStatus(
-                level=level, name=f"pcrp_node: {topic}", hardware_id="pcrp",
+                level=level, name=f"{self.get_name()}: {topic}", hardware_id="pcrp",
                 message=f"{snap.get('answered', 0)} answered of {snap.get('received', 0)}",
                 values=[KeyValue(key=k, value=f"{v:.1f}" if isinstance(v, float) else str(v)) for k, v in sorted(snap.items())]))
         self._diag.publish(arr)

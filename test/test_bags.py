@@ -30,11 +30,30 @@ def test_make_bag_then_process_it(tmp_path, storage):
     assert topics["segmented_object/pose"] == POSE and topics["segmented_object/aligned_model"] == CLOUD
 
 
-def test_a_damaged_bag_is_reported_and_what_was_read_is_kept(tmp_path):
-    bag = tmp_path / "in"
-    make_bag(bag, "procedural:5", count=4, rate=10)
-    db = next(bag.glob("*.db3"))
-    raw = db.read_bytes()
-    db.write_bytes(raw[: len(raw) // 2])
+def test_a_recording_cut_short_keeps_its_whole_messages(tmp_path):
+    from pcrp_ros.robustness import truncated_bag
+    mcap, sqlite = tmp_path / "mcap", tmp_path / "sqlite"
+    sent = truncated_bag(mcap, "mcap", keep=0.6)
+    clouds, truths, problems = read_bag(mcap)
+    assert 0 < len(clouds) < sent and len(truths) >= len(clouds)
+    assert any("truncated" in p for p in problems) and any("salvaged" in p for p in problems)
+    truncated_bag(sqlite, "sqlite3", keep=0.6)
+    clouds, _, problems = read_bag(sqlite)
+    assert not clouds and any("cannot open bag" in p for p in problems)
+
+
+def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path, capsys):
+    import subprocess
+    import sys
+    from pcrp_ros.robustness import mixed_bag
+    bag = tmp_path / "mixed"
+    written = mixed_bag(bag)
     clouds, _, problems = read_bag(bag)
-    assert problems and len(clouds) < 4
+    assert len(clouds) == written["segmented_object"] + written["other/points"]
+    assert problems == ["ignored topics of other types: chatter"]
+    rows = process_bag(bag, tmp_path / "out", PCRP.load(default_model_path()), quiet=True, topics=["segmented_object"])
+    assert [r["status"] for r in rows].count("rejected: missing_field") == 1 and len(rows) == 4
+    assert "skipped clouds on topics not asked for: other/points (3)" in capsys.readouterr().err
+    out = subprocess.run([sys.executable, "-m", "pcrp_ros.cli", "process", str(bag), "--out", str(tmp_path / "none"),
+                          "--topics", "no/such/topic"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 1 and "no clouds on the topics asked for: no/such/topic" in out.stderr

@@ -71,7 +71,7 @@ def test_large_clouds_are_downsampled_and_answered(model):
 
 
 @pytest.mark.parametrize("cloud, reason", [
-    (np.zeros((0, 3)), "no_finite_points"),
+    (np.zeros((0, 3)), "empty"),
     (np.full((100, 3), np.nan), "no_finite_points"),
     (np.random.default_rng(0).normal(size=(10, 3)), "too_few_points"),
     (np.ones((500, 3)), "too_few_points"),

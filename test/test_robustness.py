@@ -1,7 +1,5 @@
-"""Whatever a segmenter sends: the core answers or refuses with a reason, never crashes;
-the node refuses to start on a bad model with one clear line."""
-import subprocess
-import sys
+"""Whatever a segmenter sends: the core answers or refuses with a reason, never crashes.
+(The node's side of it is in test_node_robustness.py.)"""
 import time
 
 import numpy as np
@@ -22,7 +20,7 @@ def _answer_or_reason(model, cloud):
     try:
         return model.estimate(cloud)
     except InvalidCloud as e:
-        assert e.reason in {"no_finite_points", "too_few_points", "degenerate", "bad_shape"}
+        assert e.reason in {"empty", "no_finite_points", "too_few_points", "degenerate", "bad_shape"}
         return e.reason
 
 
@@ -77,11 +75,3 @@ def test_any_rotation_and_translation_of_a_gallery_object_gives_its_pose(model, 
     assert r.gallery_id == "proc_airplane_0004"
     assert rotation_error_deg(r.rotation, R) < 1.0
     np.testing.assert_allclose(r.translation, shift, atol=0.01)
-
-
-@pytest.mark.parametrize("path, words", [("/no/such/model", "no such model"), (__file__, "not a file")])
-def test_the_node_stops_at_start_up_on_a_bad_model_with_one_clear_line(path, words):
-    out = subprocess.run([sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-p", f"model_path:={path}"],
-                         capture_output=True, text=True, timeout=60)
-    assert out.returncode == 1
-    assert words in out.stderr and path in out.stderr and "Traceback" not in out.stderr

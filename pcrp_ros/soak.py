@@ -1,0 +1,233 @@
+"""Soak: the node as its own process, fed a mix of good and bad clouds on several topics at a
+steady rate, then held to account: every cloud sent is received, every bad one refused under
+its reason, every good one answered, refused for fit or dropped as stale, memory flat, no
+crash, and a clean exit on Ctrl-C.
+
+`pcrp soak` runs it (10 minutes, 4 topics, 10 Hz by default); the test suite runs a short one.
+"""
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from pcrp_ros.bad_clouds import CASES, GoodCloud, good_cloud
+
+NODE_NAME = "pcrp_soak_node"
+
+
+def _rss_mb(pid: int) -> float:
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return float("nan")
+
+
+def refused_on_arrival():
+    """Bad cases with exactly one allowed outcome, a rejection the node makes before queueing
+    (so it is counted whatever the load): reason -> case."""
+    out = {}
+    for c in CASES:
+        if len(c.allowed) == 1:
+            (outcome,) = c.allowed
+            if outcome.startswith("rejected:") and outcome != "rejected:low_score":
+                out.setdefault(outcome.split(":", 1)[1], c)
+    return out
+
+
+def _start_node(topics, model_path, log_path):
+    params = Path(tempfile.mkdtemp(prefix="pcrp_soak_")) / "params.yaml"
+    lines = [f"{NODE_NAME}:", "  ros__parameters:", f"    input_topics: [{', '.join(topics)}]"]
+    if model_path:
+        lines.append(f"    model_path: '{model_path}'")
+    params.write_text("\n".join(lines) + "\n")
+    cmd = [sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-r", f"__node:={NODE_NAME}", "--params-file", str(params)]
+    return subprocess.Popen(cmd, stdout=log_path.open("w"), stderr=subprocess.STDOUT)
+
+
+class _Diagnostics:
+    """The node's latest /diagnostics values per topic."""
+
+    def __init__(self, client, topics):
+        from diagnostic_msgs.msg import DiagnosticArray
+        self.values = {}
+        self._names = {f"{NODE_NAME}: {t}": t for t in topics}
+        client.create_subscription(DiagnosticArray, "/diagnostics", self._on, 10)
+
+    def _on(self, arr):
+        for s in arr.status:
+            if s.name in self._names:
+                self.values[self._names[s.name]] = {kv.key: kv.value for kv in s.values}
+
+    def get(self, topic, key, default=0.0) -> float:
+        return float(self.values.get(topic, {}).get(key, default))
+
+
+def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
+        model_path: str | None = None, seed: int = 0, progress=print) -> dict:
+    import rclpy
+    from geometry_msgs.msg import PoseStamped
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import QoSProfile
+    from sensor_msgs.msg import PointCloud2
+    from std_msgs.msg import Header
+
+    from pcrp_core import PCRP
+    from pcrp_ros.conversions import xyz_to_pointcloud2
+
+    model = PCRP.load(model_path)
+    rng = np.random.default_rng(seed)
+    goods = [good_cloud(model, seed=s, gallery_index=int(i))
+             for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))]
+    bads = refused_on_arrival()
+    topics = [f"pcrp_soak/object_{k}" for k in range(n_topics)]
+    log_path = Path(tempfile.mkdtemp(prefix="pcrp_soak_log_")) / "node.log"
+    proc = _start_node(topics, model_path, log_path)
+
+    rclpy.init()
+    client = rclpy.create_node("pcrp_soak_driver")
+    diag = _Diagnostics(client, topics)
+    poses = Counter()
+    for t in topics:
+        client.create_subscription(PoseStamped, f"/{t}/pose", lambda m, t=t: poses.update([t]), 50)
+    pubs = {t: client.create_publisher(PointCloud2, f"/{t}", QoSProfile(depth=10)) for t in topics}
+    executor = SingleThreadedExecutor()
+    executor.add_node(client)
+    spin = threading.Thread(target=executor.spin, daemon=True)
+    spin.start()
+    sent = {t: Counter() for t in topics}
+    rss = []
+    try:
+        deadline = time.monotonic() + 60.0
+        while time.monotonic() < deadline and not all(p.get_subscription_count() for p in pubs.values()):
+            if proc.poll() is not None:
+                raise RuntimeError(f"the node exited at start-up; see {log_path}")
+            time.sleep(0.1)
+        # the driver sees the match before the node's reader has seen the writer: give discovery
+        # a moment, or the first clouds are lost on the way
+        time.sleep(2.0)
+        progress(f"soak: node up (pid {proc.pid}); {n_topics} topics at {rate:g} Hz for {duration:g} s, "
+                 f"{bad_share:.0%} bad clouds")
+        bad_cycle = list(bads.items())
+        t0 = next_rss = time.monotonic()
+        tick = 0
+        while time.monotonic() - t0 < duration:
+            for k, t in enumerate(topics):
+                header = Header(stamp=client.get_clock().now().to_msg(), frame_id="camera_optical_frame")
+                if rng.random() < bad_share:
+                    reason, case = bad_cycle[(tick * n_topics + k) % len(bad_cycle)]
+                    pubs[t].publish(case.make(goods[0], header))
+                    sent[t]["bad"] += 1
+                    sent[t][f"bad_{reason}"] += 1
+                else:
+                    g: GoodCloud = goods[(tick + k) % len(goods)]
+                    pubs[t].publish(xyz_to_pointcloud2(g.points, header))
+                    sent[t]["good"] += 1
+            tick += 1
+            now = time.monotonic()
+            if now >= next_rss:
+                rss.append((now - t0, _rss_mb(proc.pid)))
+                next_rss += max(1.0, duration / 60)
+                if len(rss) % 10 == 0:
+                    progress(f"soak: {now - t0:5.0f} s, sent {sum(s['good'] + s['bad'] for s in sent.values())}, "
+                             f"answered {int(sum(diag.get(x, 'answered') for x in topics))}, rss {rss[-1][1]:.0f} MB")
+            time.sleep(max(0.0, t0 + tick / rate - time.monotonic()))
+            if proc.poll() is not None:
+                break
+        rss.append((time.monotonic() - t0, _rss_mb(proc.pid)))
+        # let the worker finish its last cloud and diagnostics catch up with everything sent
+        settle = time.monotonic() + 30.0
+        total = lambda t: sum(diag.get(t, k) for k in ("answered", "rejected", "dropped_stale"))  # noqa: E731
+        while time.monotonic() < settle and proc.poll() is None and not all(
+                diag.get(t, "received") == sent[t]["good"] + sent[t]["bad"] and total(t) == diag.get(t, "received")
+                for t in topics):
+            time.sleep(0.5)
+        time.sleep(1.5)   # one more diagnostics period, so the figures read are final
+        alive = proc.poll() is None
+        if alive:
+            proc.send_signal(signal.SIGINT)
+        try:
+            code = proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            code = proc.wait()
+    finally:
+        executor.shutdown(timeout_sec=2.0)
+        client.destroy_node()
+        rclpy.try_shutdown()
+        if proc.poll() is None:
+            proc.kill()
+    log = log_path.read_text(errors="replace")
+    return _summarise(topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, str(log_path))
+
+
+def _summarise(topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, log_path) -> dict:
+    per_topic = {}
+    checks = {"no crash (alive at the end, exit 0 on Ctrl-C, no traceback)": alive and code == 0 and "Traceback" not in log}
+    for t in topics:
+        d = {k: diag.get(t, k) for k in ("received", "answered", "rejected", "dropped_stale", "rejected_low_score",
+                                         "latency_p50_ms", "latency_p95_ms", "age_p50_ms", "age_p95_ms")}
+        s = sent[t]
+        bad_counted = all(diag.get(t, f"rejected_{k[4:]}") == v for k, v in s.items() if k.startswith("bad_"))
+        good_accounted = d["answered"] + d["rejected_low_score"] + d["dropped_stale"] == s["good"]
+        per_topic[t] = {"sent_good": s["good"], "sent_bad": s["bad"], **d, "poses_seen": poses[t]}
+        checks[f"{t}: every cloud sent was received"] = d["received"] == s["good"] + s["bad"]
+        checks[f"{t}: every bad cloud counted under its reason"] = bad_counted
+        checks[f"{t}: every good cloud answered, refused for fit or dropped stale"] = good_accounted
+        checks[f"{t}: a pose published for every answer"] = poses[t] == d["answered"]
+    warm = [m for s, m in rss if s >= 0.2 * duration] or [m for _, m in rss]
+    growth = warm[-1] / warm[0] - 1.0 if warm else float("nan")
+    checks["resident memory flat within 10 % after warm-up"] = bool(abs(growth) <= 0.10)
+    return {"duration_s": duration, "rate_hz": rate, "topics": len(topics), "bad_share": bad_share,
+            "per_topic": per_topic, "rss_mb": [(round(s, 1), round(m, 1)) for s, m in rss],
+            "rss_start_mb": rss[0][1] if rss else float("nan"), "rss_warm_mb": warm[0] if warm else float("nan"),
+            "rss_end_mb": rss[-1][1] if rss else float("nan"), "rss_growth_after_warmup": growth,
+            "exit_code": code, "node_log": log_path, "checks": checks, "passed": all(checks.values())}
+
+
+def table(result: dict) -> str:
+    rows = ["| topic | good sent | bad sent | received | answered | refused (fit) | refused (bad input) | dropped stale "
+            "| latency p50 / p95 ms | age p50 / p95 ms |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for t, d in result["per_topic"].items():
+        bad = d["rejected"] - d["rejected_low_score"]
+        rows.append(f"| {t} | {d['sent_good']} | {d['sent_bad']} | {d['received']:.0f} | {d['answered']:.0f} "
+                    f"| {d['rejected_low_score']:.0f} | {bad:.0f} | {d['dropped_stale']:.0f} "
+                    f"| {d['latency_p50_ms']:.0f} / {d['latency_p95_ms']:.0f} | {d['age_p50_ms']:.0f} / {d['age_p95_ms']:.0f} |")
+    rows.append("")
+    rows.append(f"Resident memory of the node: {result['rss_start_mb']:.0f} MB at start, {result['rss_warm_mb']:.0f} MB "
+                f"after warm-up (20 % of the run), {result['rss_end_mb']:.0f} MB at the end "
+                f"({100 * result['rss_growth_after_warmup']:+.1f} % after warm-up). Exit code on Ctrl-C: {result['exit_code']}.")
+    rows.append("")
+    rows += [f"- {'pass' if ok else 'FAIL'}: {name}" for name, ok in result["checks"].items()]
+    return "\n".join(rows)
+
+
+def register(sub) -> None:
+    p = sub.add_parser("soak", help="run the node for a while on good and bad clouds and check it held up")
+    p.add_argument("--duration", type=float, default=600.0, help="seconds of publishing")
+    p.add_argument("--rate", type=float, default=10.0, help="clouds per second on each topic")
+    p.add_argument("--topics", type=int, default=4)
+    p.add_argument("--bad-share", type=float, default=0.2)
+    p.add_argument("--model", default=None)
+    p.add_argument("--json", default=None, help="also write the figures to this JSON file")
+    p.set_defaults(func=_soak)
+
+
+def _soak(args) -> int:
+    import json
+    result = run(args.duration, args.rate, args.topics, args.bad_share, args.model)
+    print(table(result))
+    if args.json:
+        Path(args.json).write_text(json.dumps(result, indent=1))
+    return 0 if result["passed"] else 1
+

@@ -1,0 +1,128 @@
+"""The node survives what a segmenter, a disk or a busy robot throws at it: every bad cloud of
+the catalogue over DDS, every broken model file at start-up, publishers and instances that come
+and go, and a short soak. The same catalogues write docs/results/ROBUSTNESS.md."""
+import numpy as np
+import pytest
+from rclpy.parameter import Parameter
+
+from rosutil import publish_until, ros_context, spinning, wait_for  # noqa: F401 (sets ROS_DOMAIN_ID first)
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PoseStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import Header
+from builtin_interfaces.msg import Time
+
+from pcrp_core import ModelError, PCRP, default_model_path
+from pcrp_ros.bad_clouds import CASES, CaseRunner, accepted, good_cloud
+from pcrp_ros.conversions import xyz_to_pointcloud2
+from pcrp_ros.faults import FAULTS, damaged_copy, handled, try_fault
+from pcrp_ros.node import PcrpNode
+
+
+@pytest.fixture(scope="module")
+def model():
+    return PCRP.load(default_model_path())
+
+
+@pytest.fixture(scope="module")
+def runner(model):
+    import rclpy
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx)
+        client = rclpy.create_node("pcrp_test_client", context=ctx)
+        r = CaseRunner(node, client, good_cloud(model))
+        with spinning(ctx, node, client):
+            assert r.ready()
+            yield r
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_each_bad_cloud_is_refused_or_answered_and_the_next_good_one_answered(runner, case):
+    before = runner.stats.snapshot()
+    out = runner.run(case)
+    assert accepted(case, out), (out.outcome, out.next_good)
+    after = runner.stats.snapshot()
+    assert after["received"] == before.get("received", 0) + 2
+    if out.outcome.startswith("rejected:"):
+        key = "rejected_" + out.outcome.split(":", 1)[1]
+        assert after[key] == before.get(key, 0) + 1
+
+
+def test_a_million_point_cloud_is_answered_in_bounded_time(runner):
+    out = runner.run(next(c for c in CASES if c.name == "million_points"))
+    assert out.seconds < 15.0
+
+
+@pytest.mark.parametrize("fault", FAULTS, ids=[f.name for f in FAULTS])
+def test_a_broken_model_stops_the_node_and_the_cli_with_one_clear_line(fault, tmp_path):
+    cloud = tmp_path / "cloud.npy"
+    np.save(cloud, np.random.default_rng(0).normal(size=(200, 3)))
+    with pytest.raises(ModelError, match=fault.words):
+        PCRP.load(damaged_copy(fault, default_model_path(), tmp_path))
+    for program in ("node", "cli"):
+        result = try_fault(fault, program, default_model_path(), tmp_path, cloud)
+        assert handled(fault, result, str(tmp_path / fault.name)), (program, result.returncode, result.stderr)
+
+
+def _header(sec):
+    return Header(stamp=Time(sec=sec, nanosec=0), frame_id="camera_optical_frame")
+
+
+def test_publishers_that_come_and_go_and_reliable_ones_are_all_answered(model):
+    import rclpy
+    g = good_cloud(model)
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx)
+        listener = rclpy.create_node("listener", context=ctx)
+        poses = []
+        listener.create_subscription(PoseStamped, "/segmented_object/pose", poses.append, 10)
+        with spinning(ctx, node, listener) as ex:
+            for k, reliability in enumerate([ReliabilityPolicy.BEST_EFFORT, ReliabilityPolicy.RELIABLE,
+                                             ReliabilityPolicy.BEST_EFFORT]):
+                # a fresh publisher node each time, gone before the next one comes
+                pub_node = rclpy.create_node(f"camera_{k}", context=ctx)
+                pub = pub_node.create_publisher(PointCloud2, "/segmented_object",
+                                                QoSProfile(depth=2, reliability=reliability))
+                assert wait_for(lambda: pub.get_subscription_count(), 10)
+                assert publish_until(pub, xyz_to_pointcloud2(g.points, _header(k + 1)),
+                                     lambda: any(p.header.stamp.sec == k + 1 for p in poses)), f"publisher {k} not answered"
+                pub_node.destroy_node()
+        assert {p.header.stamp.sec for p in poses} == {1, 2, 3}
+        assert node.stats["segmented_object"].counts["rejected"] == 0
+
+
+def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
+    import rclpy
+    g = good_cloud(model)
+    with ros_context() as ctx:
+        first = PcrpNode(model=model, context=ctx)
+        second = PcrpNode(model=PCRP.load(default_model_path()), node_name="pcrp_node_2", context=ctx)
+        client = rclpy.create_node("client", context=ctx)
+        poses, names = [], set()
+        client.create_subscription(PoseStamped, "/segmented_object/pose", poses.append, 10)
+        client.create_subscription(DiagnosticArray, "/diagnostics",
+                                   lambda a: names.update(s.name for s in a.status), 10)
+        pub = client.create_publisher(PointCloud2, "/segmented_object", QoSProfile(depth=2))
+        with spinning(ctx, first, second, client):
+            assert wait_for(lambda: pub.get_subscription_count() == 2, 10)
+            answered = lambda n: n.stats["segmented_object"].counts["answered"]  # noqa: E731
+            assert publish_until(pub, xyz_to_pointcloud2(g.points, _header(7)),
+                                 lambda: answered(first) and answered(second) and len(poses) >= 2)
+            assert wait_for(lambda: {"pcrp_node: segmented_object", "pcrp_node_2: segmented_object"} <= names, 5)
+            assert wait_for(lambda: len(poses) == answered(first) + answered(second), 10)
+        # one answer per instance per cloud received, all with the cloud's header and the same pose
+        assert len(poses) == answered(first) + answered(second)
+        assert all(p.header == poses[0].header for p in poses)
+        q = np.array([[p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z, p.pose.orientation.w]
+                      for p in poses])
+        np.testing.assert_allclose(np.abs(q @ q[0]), 1.0, atol=1e-6)
+
+
+def test_a_short_soak_accounts_for_every_cloud(capsys):
+    from pcrp_ros.soak import run
+    result = run(duration=15.0, rate=5.0, n_topics=2, bad_share=0.3)
+    failed = [name for name, ok in result["checks"].items() if not ok]
+    assert not failed, (failed, result["per_topic"])
+    for d in result["per_topic"].values():
+        assert d["sent_bad"] > 0 and d["answered"] > 0 and d["received"] == d["sent_good"] + d["sent_bad"]
