@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.pcrp-setup
 
-.PHONY: setup demo test clean-venv
+.PHONY: setup demo test robustness clean-venv
 
 setup: $(STAMP)
 
@@ -24,6 +24,10 @@ demo: setup
 
 test: setup
 	$(PY) -m pytest -q test
+
+# regenerates docs/results/ROBUSTNESS.md (about 15 minutes: every bad input, then a 10-minute soak)
+robustness: setup
+	$(VENV)/bin/pcrp robustness --out docs/results
 
 clean-venv:
 	rm -rf $(VENV)

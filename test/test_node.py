@@ -154,3 +154,30 @@ def test_a_bag_replayed_to_the_node_is_answered_with_its_stamps(model, tmp_path)
         assert n == 3 and len(sent) == 3 and stats.counts["received"] == 3
         assert len(listen.poses) == stats.counts["answered"] >= 1
         assert all((p.header.stamp.sec, p.header.stamp.nanosec) in sent for p in listen.poses)
+
+
+def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly():
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+    config = Path(__file__).resolve().parents[1] / "config" / "pcrp.yaml"
+    proc = subprocess.Popen([sys.executable, "-m", "pcrp_ros.node", "--ros-args", "--params-file", str(config)],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lines = []
+    try:
+        end = time.monotonic() + 60
+        while time.monotonic() < end and not any("listening on" in line for line in lines):
+            line = proc.stdout.readline()
+            if not line:
+                break
+            lines.append(line)
+        assert any("listening on /segmented_object" in line for line in lines), lines
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=20) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    rest = proc.stdout.read()
+    assert "Traceback" not in rest

@@ -126,3 +126,24 @@ def test_a_short_soak_accounts_for_every_cloud(capsys):
     assert not failed, (failed, result["per_topic"])
     for d in result["per_topic"].values():
         assert d["sent_bad"] > 0 and d["answered"] > 0 and d["received"] == d["sent_good"] + d["sent_bad"]
+
+
+def test_rejections_are_logged_once_per_reason_per_throttle_period(model):
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=[Parameter("log_throttle_sec", value=60.0)])
+        said = []
+
+        class Logger:
+            def warn(self, text):
+                said.append(text)
+        node.get_logger = Logger
+        try:
+            for reason in ("missing_field", "missing_field", "empty", "missing_field", "empty"):
+                node._reject("segmented_object", reason, "details")
+            assert node.stats["segmented_object"].rejections == {"missing_field": 3, "empty": 2}
+            assert len(said) == 2 and "missing_field, 1 so far" in said[0] and "(empty, 1 so far)" in said[1]
+            node.set_parameters([Parameter("log_throttle_sec", value=0.0)])
+            node._reject("segmented_object", "empty", "details")
+            assert len(said) == 3 and "(empty, 3 so far)" in said[2]
+        finally:
+            node.destroy_node()
