@@ -45,23 +45,59 @@ def refused_on_arrival():
     return out
 
 
-def _start_node(topics, model_path, log_path):
-    params = Path(tempfile.mkdtemp(prefix="pcrp_soak_")) / "params.yaml"
-    lines = [f"{NODE_NAME}:", "  ros__parameters:", f"    input_topics: [{', '.join(topics)}]"]
-    if model_path:
-        lines.append(f"    model_path: '{model_path}'")
-    params.write_text("\n".join(lines) + "\n")
-    cmd = [sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-r", f"__node:={NODE_NAME}", "--params-file", str(params)]
-    return subprocess.Popen(cmd, stdout=log_path.open("w"), stderr=subprocess.STDOUT)
+class _NodeProcesses:
+    """k node processes, each answering its share of the topics (round robin), as a user scales
+    out: one model file, several processes, topics split between them by parameter."""
+
+    def __init__(self, topics, k: int, model_path):
+        self.dir = Path(tempfile.mkdtemp(prefix="pcrp_soak_"))
+        self.names = [NODE_NAME if k == 1 else f"{NODE_NAME}_{i}" for i in range(k)]
+        self.share = {name: topics[i::k] for i, name in enumerate(self.names)}
+        self.procs = [self._start(name, model_path) for name in self.names]
+
+    def _start(self, name, model_path):
+        params = self.dir / f"{name}.yaml"
+        lines = [f"{name}:", "  ros__parameters:", f"    input_topics: [{', '.join(self.share[name])}]"]
+        if model_path:
+            lines.append(f"    model_path: '{model_path}'")
+        params.write_text("\n".join(lines) + "\n")
+        cmd = [sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-r", f"__node:={name}", "--params-file", str(params)]
+        return subprocess.Popen(cmd, stdout=(self.dir / f"{name}.log").open("w"), stderr=subprocess.STDOUT)
+
+    def diagnostic_names(self) -> dict:
+        return {f"{name}: {t}": t for name in self.names for t in self.share[name]}
+
+    def alive(self) -> bool:
+        return all(p.poll() is None for p in self.procs)
+
+    def rss_mb(self) -> float:
+        return sum(_rss_mb(p.pid) for p in self.procs)
+
+    def stop(self) -> list[int]:
+        """Ctrl-C each, as a user would; exit codes (killed ones count as -9)."""
+        codes = []
+        for p in self.procs:
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+        for p in self.procs:
+            try:
+                codes.append(p.wait(timeout=20))
+            except subprocess.TimeoutExpired:
+                p.kill()
+                codes.append(p.wait())
+        return codes
+
+    def log(self) -> str:
+        return "".join((self.dir / f"{n}.log").read_text(errors="replace") for n in self.names)
 
 
 class _Diagnostics:
     """The node's latest /diagnostics values per topic."""
 
-    def __init__(self, client, topics):
+    def __init__(self, client, names: dict):
         from diagnostic_msgs.msg import DiagnosticArray
         self.values = {}
-        self._names = {f"{NODE_NAME}: {t}": t for t in topics}
+        self._names = names
         client.create_subscription(DiagnosticArray, "/diagnostics", self._on, 10)
 
     def _on(self, arr):
@@ -74,7 +110,7 @@ class _Diagnostics:
 
 
 def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
-        model_path: str | None = None, seed: int = 0, progress=print) -> dict:
+        model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print) -> dict:
     import rclpy
     from geometry_msgs.msg import PoseStamped
     from rclpy.executors import SingleThreadedExecutor
@@ -91,12 +127,11 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
              for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))]
     bads = refused_on_arrival()
     topics = [f"pcrp_soak/object_{k}" for k in range(n_topics)]
-    log_path = Path(tempfile.mkdtemp(prefix="pcrp_soak_log_")) / "node.log"
-    proc = _start_node(topics, model_path, log_path)
+    nodes = _NodeProcesses(topics, processes, model_path)
 
     rclpy.init()
     client = rclpy.create_node("pcrp_soak_driver")
-    diag = _Diagnostics(client, topics)
+    diag = _Diagnostics(client, nodes.diagnostic_names())
     poses = Counter()
     for t in topics:
         client.create_subscription(PoseStamped, f"/{t}/pose", lambda m, t=t: poses.update([t]), 50)
@@ -110,13 +145,13 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     try:
         deadline = time.monotonic() + 60.0
         while time.monotonic() < deadline and not all(p.get_subscription_count() for p in pubs.values()):
-            if proc.poll() is not None:
-                raise RuntimeError(f"the node exited at start-up; see {log_path}")
+            if not nodes.alive():
+                raise RuntimeError(f"a node exited at start-up; see the logs in {nodes.dir}")
             time.sleep(0.1)
         # the driver sees the match before the node's reader has seen the writer: give discovery
         # a moment, or the first clouds are lost on the way
         time.sleep(2.0)
-        progress(f"soak: node up (pid {proc.pid}); {n_topics} topics at {rate:g} Hz for {duration:g} s, "
+        progress(f"soak: {processes} node process(es) up; {n_topics} topics at {rate:g} Hz for {duration:g} s, "
                  f"{bad_share:.0%} bad clouds")
         bad_cycle = list(bads.items())
         t0 = next_rss = time.monotonic()
@@ -136,39 +171,38 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
             tick += 1
             now = time.monotonic()
             if now >= next_rss:
-                rss.append((now - t0, _rss_mb(proc.pid)))
+                rss.append((now - t0, nodes.rss_mb()))
                 next_rss += max(1.0, duration / 60)
                 if len(rss) % 10 == 0:
                     progress(f"soak: {now - t0:5.0f} s, sent {sum(s['good'] + s['bad'] for s in sent.values())}, "
                              f"answered {int(sum(diag.get(x, 'answered') for x in topics))}, rss {rss[-1][1]:.0f} MB")
             time.sleep(max(0.0, t0 + tick / rate - time.monotonic()))
-            if proc.poll() is not None:
+            if not nodes.alive():
                 break
-        rss.append((time.monotonic() - t0, _rss_mb(proc.pid)))
+        rss.append((time.monotonic() - t0, nodes.rss_mb()))
         # let the worker finish its last cloud and diagnostics catch up with everything sent
         settle = time.monotonic() + 30.0
         total = lambda t: sum(diag.get(t, k) for k in ("answered", "rejected", "dropped_stale"))  # noqa: E731
-        while time.monotonic() < settle and proc.poll() is None and not all(
+        while time.monotonic() < settle and nodes.alive() and not all(
                 diag.get(t, "received") == sent[t]["good"] + sent[t]["bad"] and total(t) == diag.get(t, "received")
                 for t in topics):
             time.sleep(0.5)
         time.sleep(1.5)   # one more diagnostics period, so the figures read are final
-        alive = proc.poll() is None
-        if alive:
-            proc.send_signal(signal.SIGINT)
-        try:
-            code = proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            code = proc.wait()
+        alive = nodes.alive()
+        codes = nodes.stop()
     finally:
         executor.shutdown(timeout_sec=2.0)
+        spin.join(timeout=5.0)   # a spinning thread left at exit aborts the interpreter (std::terminate)
         client.destroy_node()
         rclpy.try_shutdown()
-        if proc.poll() is None:
-            proc.kill()
-    log = log_path.read_text(errors="replace")
-    return _summarise(topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, str(log_path))
+        for p in nodes.procs:
+            if p.poll() is None:
+                p.kill()
+    code = max(codes, key=abs)
+    result = _summarise(topics, sent, diag, poses, rss, alive, code, nodes.log(), duration, rate, bad_share,
+                        str(nodes.dir))
+    result["processes"] = processes
+    return result
 
 
 def _summarise(topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, log_path) -> dict:
@@ -204,7 +238,8 @@ def table(result: dict) -> str:
                     f"| {d['rejected_low_score']:.0f} | {bad:.0f} | {d['dropped_stale']:.0f} "
                     f"| {d['latency_p50_ms']:.0f} / {d['latency_p95_ms']:.0f} | {d['age_p50_ms']:.0f} / {d['age_p95_ms']:.0f} |")
     rows.append("")
-    rows.append(f"Resident memory of the node: {result['rss_start_mb']:.0f} MB at start, {result['rss_warm_mb']:.0f} MB "
+    who = "the node" if result.get("processes", 1) == 1 else f"the {result['processes']} node processes together"
+    rows.append(f"Resident memory of {who}: {result['rss_start_mb']:.0f} MB at start, {result['rss_warm_mb']:.0f} MB "
                 f"after warm-up (20 % of the run), {result['rss_end_mb']:.0f} MB at the end "
                 f"({100 * result['rss_growth_after_warmup']:+.1f} % after warm-up). Exit code on Ctrl-C: {result['exit_code']}.")
     rows.append("")
@@ -218,6 +253,7 @@ def register(sub) -> None:
     p.add_argument("--rate", type=float, default=10.0, help="clouds per second on each topic")
     p.add_argument("--topics", type=int, default=4)
     p.add_argument("--bad-share", type=float, default=0.2)
+    p.add_argument("--processes", type=int, default=1, help="node processes sharing the topics")
     p.add_argument("--model", default=None)
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")
     p.set_defaults(func=_soak)
@@ -225,7 +261,7 @@ def register(sub) -> None:
 
 def _soak(args) -> int:
     import json
-    result = run(args.duration, args.rate, args.topics, args.bad_share, args.model)
+    result = run(args.duration, args.rate, args.topics, args.bad_share, args.model, processes=args.processes)
     print(table(result))
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=1))
