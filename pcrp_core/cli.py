@@ -39,6 +39,7 @@ def register_build(sub) -> None:
                    help="also describe this many one-sided views per object, for depth-camera queries (default 0)")
     p.add_argument("--limit", type=int, default=None, help="at most this many objects per source category")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--jobs", type=int, default=None, help="processes describing objects (default: one per core)")
     p.set_defaults(func=_build)
 
 
@@ -55,7 +56,8 @@ def _build(args) -> int:
         return _fail(str(e))
     print(f"{len(objects)} objects in {len(set(o.category for o in objects))} categories; fitting...", file=sys.stderr)
     model = PCRP.build(objects, hop1=args.hop1, n_clusters=args.clusters, aggregation=args.aggregation,
-                       n_points=args.n_points, views=args.views, seed=args.seed, sources=args.sources, progress=_progress)
+                       n_points=args.n_points, views=args.views, seed=args.seed, sources=args.sources, progress=_progress,
+                       n_jobs=args.jobs)
     model.save(args.out)
     size = model_size(args.out)
     print(f"built {args.out}: {len(objects)} objects, categories {', '.join(model.categories)}, "

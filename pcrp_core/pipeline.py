@@ -18,12 +18,12 @@ import numpy as np
 
 from pcrp_core import model_io
 from pcrp_core.errors import InvalidCloud, ModelError
+from pcrp_core.parallel import object_features, parallel_map, view_vectors
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
 from pcrp_core.pose import PoseOptions, Prepared, Registrar, prepare
 from pcrp_core.preprocess import check_geometry, downsample, finite_points
 from pcrp_core.result import PoseResult
-from pcrp_core.visibility import visible_from
 from pcrp_core.vlad import VLAD
 
 DEFAULT_MODEL = Path(__file__).parent / "data" / "default_model"
@@ -129,19 +129,19 @@ class PCRP:
     def build(cls, objects, *, hop1: str = "fpfh", n_clusters: int = 10, aggregation: str = "vlad",
               n_points: int = 1024, fit_clouds: int = 400, energy_threshold1: float = 1e-3,
               energy_threshold2: float = 5e-4, views: int = 0, seed: int = 0, sources=(),
-              progress=None) -> "PCRP":
+              progress=None, n_jobs: int | None = None) -> "PCRP":
         """Fit FR-PointHop and the VLAD codebook on the gallery, then describe every object.
 
         objects: GalleryObject-like items (gallery_id, category, points), pre-aligned.
         fit_clouds bounds how many objects the Saab kernels are fitted on (PCA needs far
         fewer samples than a large gallery has); views adds, per object, the descriptors of that
         many one-sided views (what a depth camera sees from evenly spread directions), so that
-        one-sided queries find their object; progress wraps iterables (e.g. tqdm).
+        one-sided queries find their object; progress wraps iterables (e.g. tqdm); n_jobs
+        processes describe the objects (default: one per core; the result does not depend on it).
         """
         objects = list(objects)
         if not objects:
             raise ValueError("cannot build a model from an empty gallery")
-        wrap = progress or (lambda it, **_: it)
         clouds = [downsample(finite_points(o.points), n_points, seed) for o in objects]
         unit = float(np.median([np.linalg.norm(c - c.mean(0), axis=1).max() for c in clouds]))
         normed = [(c - c.mean(0)) / unit for c in clouds]
@@ -150,18 +150,19 @@ class PCRP:
         pointhop = PointHop(hop1=hop1, energy_threshold1=energy_threshold1,
                             energy_threshold2=energy_threshold2, random_state=seed)
         pointhop.fit([normed[i] for i in fit_idx])
-        feats = [pointhop.transform(c)[1] for c in wrap(normed, desc="features", unit="obj")]
+        feats = parallel_map(object_features, normed, {"pointhop": pointhop}, n_jobs, progress, "features")
         vlad = VLAD(n_clusters=n_clusters, aggregation=aggregation, random_state=seed)
         if aggregation == "vlad":
             vlad.fit(np.concatenate(feats))
         vectors = [vlad.transform(f) for f in feats]
         owners = list(range(len(objects)))
-        for i, c in enumerate(wrap(normed, desc="views", unit="obj") if views else ()):
-            for cam in _view_directions(views) * 3.0:
-                seen = c[visible_from(c, cam)]
-                if len(seen) >= 64:
-                    vectors.append(vlad.transform(pointhop.transform(seen, cam)[1]))
-                    owners.append(i)
+        if views:
+            cameras = _view_directions(views) * 3.0
+            per_object = parallel_map(view_vectors, [(c, cameras) for c in normed],
+                                      {"pointhop": pointhop, "vlad": vlad}, n_jobs, progress, "views")
+            for i, vs in enumerate(per_object):
+                vectors += vs
+                owners += [i] * len(vs)
         gallery = Gallery([o.gallery_id for o in objects], [o.category for o in objects],
                           [c.astype(np.float32) for c in clouds], np.stack(vectors), np.array(owners))
         meta = {"sources": list(sources), "n_objects": len(objects), "n_points": n_points, "views": views,

@@ -1,0 +1,53 @@
+"""Describing many gallery objects on every core.
+
+Building a model is dominated by per-object features (FPFH and two hops), computed one object
+at a time and single-threaded inside Open3D and numpy for clouds this small, so objects are
+spread over worker processes. joblib's loky workers (joblib comes with scikit-learn) start as
+fresh interpreters: a plain fork after Open3D has run its OpenMP pool can hang the child, and
+multiprocessing's spawn re-runs the caller's script unless it has a __main__ guard. Objects go
+in chunks, so the fitted estimators are shipped once per chunk, not once per object.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+
+def default_jobs() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def _chunk(fn, state, items):
+    return [fn(state, x) for x in items]
+
+
+def parallel_map(fn, items, state: dict, n_jobs: int | None = None, progress=None, desc: str = "", chunksize: int = 16):
+    """[fn(state, item) for item in items], in order, over n_jobs processes (default: every
+    core). With one job, or few items, it runs here without processes."""
+    items = list(items)
+    wrap = progress or (lambda it, **_: it)
+    n_jobs = default_jobs() if n_jobs is None else max(1, n_jobs)
+    if n_jobs == 1 or len(items) < 2 * chunksize:
+        return [fn(state, x) for x in wrap(items, desc=desc, unit="obj")]
+    from joblib import Parallel, delayed
+    chunks = [items[i:i + chunksize] for i in range(0, len(items), chunksize)]
+    results = Parallel(n_jobs=n_jobs, backend="loky", return_as="generator")(
+        delayed(_chunk)(fn, state, c) for c in chunks)
+    return [r for part in wrap(results, desc=desc, unit=f"x{chunksize} obj", total=len(chunks)) for r in part]
+
+
+def object_features(state: dict, cloud: np.ndarray) -> np.ndarray:
+    return state["pointhop"].transform(cloud)[1]
+
+
+def view_vectors(state: dict, cloud_and_cameras) -> list[np.ndarray]:
+    """VLAD vectors of what a sensor at each camera position sees of the cloud."""
+    from pcrp_core.visibility import visible_from
+    cloud, cameras = cloud_and_cameras
+    out = []
+    for cam in cameras:
+        seen = cloud[visible_from(cloud, cam)]
+        if len(seen) >= 64:
+            out.append(state["vlad"].transform(state["pointhop"].transform(seen, cam)[1]))
+    return out
