@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from pcrp_core.registration import fit_quality, icp, ransac
+from pcrp_core.registration import fit_quality_batch, icp_batch, ransac
+from pcrp_core.registration.icp import transform_batch
 from pcrp_core.registration.correspondences import matches_within_halves
 from pcrp_core.symmetry import principal_axes, split_halves
 from pcrp_core.visibility import visible_from
@@ -61,6 +62,9 @@ class PoseOptions:
     reverse_weight: float = 0.0
     visibility_weight: float = 1.0
     coarse_icp_iterations: int = 6
+    vote_icp_iterations: int = 6        # ICP per hypothesis and candidate before the vote
+    icp_tolerance: float = 1e-6         # stop once the trimmed mean squared error gains less
+    pca_prefilter: int = 0              # points that rank the 24 PCA axis maps first (0: all of them)
     icp_iterations: int = 20
     icp_trim: float = 0.8
     icp_points: int = 256
@@ -76,6 +80,9 @@ class Hypothesis:
     rmse: float
     chamfer: float
     source: str
+    # where ICP stopped: its last mean squared error and whether it was still improving
+    icp_prev: float = np.inf
+    icp_moving: bool = True
 
 
 def _proper_signed_permutations() -> np.ndarray:
@@ -94,23 +101,34 @@ def _proper_signed_permutations() -> np.ndarray:
 AXIS_ROTATIONS = _proper_signed_permutations()
 
 
-def _pca_seeds(q: np.ndarray, g: np.ndarray, src: np.ndarray, tree: cKDTree, keep: int):
+def _pca_seeds(q: np.ndarray, g: np.ndarray, src: np.ndarray, tree: cKDTree, keep: int, prefilter: int = 0):
     """Rotations taking the query's principal axes onto the gallery's under each of the 24
     axis-to-axis maps (two instances of a category need not order their axes alike), the
     `keep` that fit best before any refinement: right for complete objects, a cheap extra
-    guess for partial ones."""
-    Rs, ts, cost = _pca_costs(q, g, src, tree)
-    for n in np.argsort(cost)[:keep]:
+    guess for partial ones.
+
+    prefilter > 0: rank all 24 on that many of the points first and score only the best
+    2 * keep on all of them; most axis maps are grossly wrong, and a few points say so."""
+    Rs, ts = _pca_rotations(q, g)
+    short = np.arange(len(Rs))
+    if 0 < prefilter < len(src) and 2 * keep < len(Rs):
+        rough = _mean_distance(src[:: max(1, len(src) // prefilter)], Rs, ts, tree)
+        short = np.sort(np.argsort(rough)[: 2 * keep])
+    cost = _mean_distance(src, Rs[short], ts[short], tree)
+    for n in short[np.argsort(cost)[:keep]]:
         yield Rs[n], ts[n], "pca"
 
 
-def _pca_costs(q, g, src, tree):
+def _pca_rotations(q, g):
     aq, ag = principal_axes(q), principal_axes(g)
     Rs = np.einsum("ji,njk,kl->nil", ag, AXIS_ROTATIONS, aq)    # ag.T @ M @ aq
-    ts = g.mean(0) - Rs @ q.mean(0)
-    moved = src[None] @ Rs.transpose(0, 2, 1) + ts[:, None, :]
-    d, _ = tree.query(moved.reshape(-1, 3))
-    return Rs, ts, d.reshape(len(Rs), -1).mean(1)
+    return Rs, g.mean(0) - Rs @ q.mean(0)
+
+
+def _mean_distance(src, Rs, ts, tree):
+    """(H,) mean distance from src under each pose to the gallery."""
+    d, _ = tree.query(transform_batch(src, Rs, ts).reshape(-1, 3))
+    return d.reshape(len(Rs), -1).mean(1)
 
 
 def _ransac_seeds(query: Prepared, gallery: Prepared, opts: PoseOptions, rng):
@@ -143,22 +161,35 @@ class Registrar:
             src = src[rng.choice(len(src), opts.icp_points, replace=False)]
         self.src = src
         # hypotheses are told apart on fewer points than the final refinement uses
-        self.coarse_src = src[: opts.coarse_points]
+        self.coarse_src = src if len(src) <= opts.coarse_points else src[: opts.coarse_points]
 
     def refine(self, R, t, gallery: Prepared, iterations: int, source: str, coarse: bool = True) -> Hypothesis:
+        return self.refine_many([R], [t], gallery, iterations, [source], coarse)[0]
+
+    def refine_many(self, Rs, ts, gallery: Prepared, iterations: int, sources, coarse: bool = True,
+                    prev=None) -> list[Hypothesis]:
+        """refine() of several poses on one gallery object, sharing its tree queries; prev
+        resumes ICP runs that stopped at those poses (see icp_batch)."""
         src = self.coarse_src if coarse else self.src
+        Rs, ts = np.asarray(Rs, dtype=np.float64), np.asarray(ts, dtype=np.float64)
+        prev, moving = (np.full(len(Rs), np.inf) if prev is None else prev), np.ones(len(Rs), bool)
         if self.opts.refine and iterations > 0:
-            R, t = icp(src, gallery.points, gallery.tree, R, t, iterations, self.opts.icp_trim)
-        moved = src @ R.T + t
-        fit, rmse, ch = fit_quality(moved, gallery.tree, self.opts.inlier_distance)
-        if self.viewpoint is not None and self.opts.visibility_weight > 0:
-            ch = ch + self.opts.visibility_weight * self._unexplained(moved, R @ self.viewpoint + t, gallery)
-        elif self.opts.reverse_weight > 0:
-            # the gallery object's points near the query too: absent parts count against a pose
-            back = cKDTree(moved).query(gallery.points[:: max(1, len(gallery.points) // len(moved))])[0]
-            k = max(1, int(0.8 * len(back)))
-            ch = ch + self.opts.reverse_weight * float(np.mean(np.partition(back, k - 1)[:k]))
-        return Hypothesis(R, t, fit, rmse, ch, source)
+            Rs, ts, prev, moving = icp_batch(src, gallery.points, gallery.tree, Rs, ts, iterations,
+                                             self.opts.icp_trim, self.opts.icp_tolerance, prev, state=True)
+        moved = transform_batch(src, Rs, ts)
+        fit, rmse, ch = fit_quality_batch(moved, gallery.tree, self.opts.inlier_distance)
+        hyps = []
+        for n, source in enumerate(sources):
+            R, t, c = Rs[n], ts[n], float(ch[n])
+            if self.viewpoint is not None and self.opts.visibility_weight > 0:
+                c = c + self.opts.visibility_weight * self._unexplained(moved[n], R @ self.viewpoint + t, gallery)
+            elif self.opts.reverse_weight > 0:
+                # the gallery object's points near the query too: absent parts count against a pose
+                back = cKDTree(moved[n]).query(gallery.points[:: max(1, len(gallery.points) // len(src))])[0]
+                k = max(1, int(0.8 * len(back)))
+                c = c + self.opts.reverse_weight * float(np.mean(np.partition(back, k - 1)[:k]))
+            hyps.append(Hypothesis(R, t, float(fit[n]), float(rmse[n]), c, source, float(prev[n]), bool(moving[n])))
+        return hyps
 
     def _unexplained(self, moved, camera, gallery: Prepared) -> float:
         """Trimmed mean distance from the gallery points the sensor would see under this pose
@@ -177,13 +208,26 @@ class Registrar:
         """Coarsely refined hypotheses for one feature-bearing gallery object."""
         seeds = list(_ransac_seeds(self.query, gallery, self.opts, self.rng)) if gallery.features is not None else []
         if self.opts.pca_hypotheses or not seeds:
-            seeds += list(_pca_seeds(self.query.points, gallery.points, self.coarse_src, gallery.tree, self.opts.pca_seeds))
-        hyps = [self.refine(R, t, gallery, self.opts.coarse_icp_iterations, s) for R, t, s in seeds]
+            seeds += list(_pca_seeds(self.query.points, gallery.points, self.coarse_src, gallery.tree,
+                                     self.opts.pca_seeds, self.opts.pca_prefilter))
+        Rs, ts, sources = zip(*seeds)
+        hyps = self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, sources)
         if self.opts.flips:
             best = min(hyps, key=lambda h: h.chamfer)
-            hyps += [self.refine(R, t, gallery, self.opts.coarse_icp_iterations, best.source + "+flip")
-                     for R, t in _flip(best.R, best.t, gallery.points.mean(0))]
+            Rs, ts = zip(*_flip(best.R, best.t, gallery.points.mean(0)))
+            hyps += self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, [best.source + "+flip"] * len(Rs))
         return hyps
+
+    def _final(self, hyp: Hypothesis, gallery: Prepared, vote: Hypothesis) -> Hypothesis:
+        """hyp fully refined on gallery. The vote already ran the first ICP iterations of that
+        very run when it used the same points, so the run resumes where the vote stopped."""
+        opts = self.opts
+        if opts.refine and self.coarse_src is self.src and 0 < opts.vote_icp_iterations <= opts.icp_iterations:
+            if not vote.icp_moving:
+                return _resumed(vote, hyp.source)
+            return self.refine_many([vote.R], [vote.t], gallery, opts.icp_iterations - opts.vote_icp_iterations,
+                                    [hyp.source], coarse=False, prev=[vote.icp_prev])[0]
+        return self.refine(hyp.R, hyp.t, gallery, opts.icp_iterations, hyp.source, coarse=False)
 
     def best_pose(self, matched: list[Prepared], verifiers: list[Prepared]) -> tuple[int, Hypothesis]:
         """(index into verifiers of the best-fitting object, its refined hypothesis).
@@ -201,17 +245,21 @@ class Registrar:
             best = min(pool, key=lambda h: h.chamfer)
             return 0, self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source, coarse=False)
         # chamfer of each hypothesis on each candidate, after a short refinement there
-        ch = np.array([[self.refine(h.R, h.t, g, self.opts.coarse_icp_iterations, "").chamfer
-                        for g in verifiers] for h in pool])
+        Rs, ts = [h.R for h in pool], [h.t for h in pool]
+        votes = [self.refine_many(Rs, ts, g, self.opts.vote_icp_iterations, [""] * len(pool)) for g in verifiers]
+        ch = np.array([[h.chamfer for h in row] for row in votes]).T
         # the best fit decides when one candidate is the very object; the median over
         # candidates decides between near-symmetric flips that one instance happens to suit
         k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch, axis=1)))
         best = pool[k]
-        refined = [self.refine(best.R, best.t, g, self.opts.icp_iterations, best.source, coarse=False)
-                   for g in verifiers]
+        refined = [self._final(best, g, row[k]) for g, row in zip(verifiers, votes)]
         j = int(np.argmin([h.chamfer for h in refined]))
         avg = _average(refined, refined[j])
         return j, self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
+
+
+def _resumed(vote: Hypothesis, source: str) -> Hypothesis:
+    return Hypothesis(vote.R, vote.t, vote.fitness, vote.rmse, vote.chamfer, source, vote.icp_prev, vote.icp_moving)
 
 
 def _average(hyps: list[Hypothesis], anchor: Hypothesis) -> Hypothesis:

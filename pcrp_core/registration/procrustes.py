@@ -5,25 +5,27 @@ import numpy as np
 
 
 def procrustes_batch(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """R (B, 3, 3), t (B, 3) minimising |R @ src + t - dst| for each batch of matches (B, n, 3)."""
-    mu_s = src.mean(axis=1, keepdims=True)
-    mu_d = dst.mean(axis=1, keepdims=True)
-    H = (src - mu_s).transpose(0, 2, 1) @ (dst - mu_d)
+    """R (B, 3, 3), t (B, 3) minimising |R @ src + t - dst| for each batch of matches (B, n, 3).
+
+    Means and cross-covariances are matrix products, not reductions over the middle axis:
+    numpy reduces (B, n, 3) along n several times slower than it multiplies."""
+    n = src.shape[1]
+    w = np.full(n, 1.0 / n)
+    mu_s, mu_d = w @ src, w @ dst
+    H = src.transpose(0, 2, 1) @ dst - n * mu_s[:, :, None] * mu_d[:, None, :]
     U, _, Vt = np.linalg.svd(H)
     # flip the weakest axis where needed so the result is a rotation, never a reflection
-    d = np.sign(np.linalg.det(Vt.transpose(0, 2, 1) @ U.transpose(0, 2, 1)))
-    D = np.tile(np.eye(3), (len(src), 1, 1))
-    D[:, 2, 2] = np.where(d == 0, 1.0, d)
-    R = Vt.transpose(0, 2, 1) @ D @ U.transpose(0, 2, 1)
-    t = mu_d[:, 0] - (R @ mu_s.transpose(0, 2, 1))[..., 0]
+    Vt[np.linalg.det(U @ Vt) < 0, 2] *= -1
+    R = (U @ Vt).transpose(0, 2, 1)
+    t = mu_d - (R @ mu_s[:, :, None])[..., 0]
     return R, t
 
 
 def procrustes(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """R (3, 3), t (3,) minimising |R @ src + t - dst| over matched rows of (n, 3) arrays.
 
-    Written out rather than calling the batch form: ICP calls it thousands of times per
-    query and the batch bookkeeping would cost more than the SVD."""
+    Written out rather than calling the batch form: for one set of matches (the single-pose
+    icp(), RANSAC's refit) the batch bookkeeping would cost more than the SVD."""
     mu_s = src.mean(axis=0)
     mu_d = dst.mean(axis=0)
     U, _, Vt = np.linalg.svd((src - mu_s).T @ (dst - mu_d))

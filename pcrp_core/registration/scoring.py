@@ -19,3 +19,15 @@ def fit_quality(aligned: np.ndarray, dst_tree: cKDTree, inlier_distance: float, 
     k = max(1, int(trim * len(dist)))
     chamfer = float(np.mean(np.partition(dist, k - 1)[:k]))
     return fitness, rmse, chamfer
+
+
+def fit_quality_batch(aligned: np.ndarray, dst_tree: cKDTree, inlier_distance: float, trim: float = 0.9):
+    """fit_quality() of many posed copies of the query at once: aligned (H, n, 3) -> three (H,) arrays."""
+    dist = dst_tree.query(aligned.reshape(-1, 3))[0].reshape(aligned.shape[:2])
+    inl = dist < inlier_distance
+    fitness = inl.mean(axis=1)
+    n_inl = inl.sum(axis=1)
+    rmse = np.where(n_inl > 0, np.sqrt(np.where(inl, dist ** 2, 0).sum(axis=1) / np.maximum(n_inl, 1)), np.inf)
+    k = max(1, int(trim * dist.shape[1]))
+    chamfer = np.partition(dist, k - 1, axis=1)[:, :k].mean(axis=1)
+    return fitness, rmse, chamfer
