@@ -217,7 +217,11 @@ class PCRP:
             raise InvalidCloud("empty", "the cloud has no points")
         if len(pts) == 0:
             raise InvalidCloud("no_finite_points", "the cloud has no finite points")
+        n_finite = len(pts)
         pts = downsample(pts, min(self.max_points, self.n_points), self.seed)
+        if len(pts) < self.min_points <= n_finite:
+            raise InvalidCloud("too_few_points", f"only {len(pts)} distinct points among {n_finite}, "
+                                                 f"at least {self.min_points} needed")
         check_geometry(pts, self.min_points)
         return pts
 

@@ -172,7 +172,7 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
         f"Made {time.strftime('%Y-%m-%d')} on {platform.machine()}, Python {platform.python_version()}. "
         "Every row below was produced by running the real thing, and the same catalogues "
         "(`pcrp_ros/bad_clouds.py`, `pcrp_ros/faults.py`, `pcrp_ros/robustness.py`) are run by the test "
-        "suite (`test/test_robustness.py`), so each row is also a passing test.",
+        "suite (`test/test_node_robustness.py`, `test/test_bags.py`), so each row is also a passing test.",
         "",
         "## Bad clouds, sent to the running node over DDS",
         "",
@@ -214,7 +214,8 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
         "## Damaged and surprising bags",
         "",
         "`pcrp process BAG --out OUT` and `pcrp replay BAG` (no node listening) on bags made for the purpose. "
-        "Both say what they could not use and carry on with what they could read.",
+        "Both say on stderr what they could not use and carry on with what they could read; they exit 1 only "
+        "when nothing at all could be read.",
         "",
         "| bag | process: exit, clouds answered / refused | what process said | replay: exit, clouds published "
         "| what replay said |",
