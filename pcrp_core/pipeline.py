@@ -19,6 +19,7 @@ import numpy as np
 from pcrp_core import model_io
 from pcrp_core.errors import InvalidCloud, ModelError
 from pcrp_core.parallel import object_features, parallel_map, view_vectors
+from pcrp_core.timing import Clock
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
 from pcrp_core.pose import PoseOptions, Prepared, Registrar, prepare
@@ -225,9 +226,12 @@ class PCRP:
         check_geometry(pts, self.min_points)
         return pts
 
-    def _describe(self, normed: np.ndarray, viewpoint=None):
-        sampled, feats = self.pointhop.transform(normed, viewpoint)
-        return sampled, feats, self.vlad.transform(feats)
+    def _describe(self, normed: np.ndarray, viewpoint=None, timings: dict | None = None):
+        sampled, feats = self.pointhop.transform(normed, viewpoint, timings)
+        clock = Clock(timings)
+        vec = self.vlad.transform(feats)
+        clock.lap("vlad")
+        return sampled, feats, vec
 
     def _prepared(self, i: int, features: bool) -> Prepared:
         """Registration-ready gallery object, recomputed on demand and kept in a bounded LRU cache
@@ -275,7 +279,7 @@ class PCRP:
         timings["preprocess"] = t1 - t0
         vp = self._viewpoint(viewpoint, centre)
         vp = None if vp is None else vp * size
-        sampled, feats, vec = self._describe(normed, vp)
+        sampled, feats, vec = self._describe(normed, vp, timings)
         t2 = time.perf_counter()
         timings["features"] = t2 - t1
         idx, dist = self.gallery.search(vec, max(10, self.n_candidates))
@@ -286,7 +290,7 @@ class PCRP:
         if self.scale_mode == "normalize":
             ratio = self._radii[idx[0]] / float(np.median(self._radii))
         registrar = Registrar(prepare(normed * ratio, sampled, feats), self.pose_options, rng,
-                              None if vp is None else vp * ratio)
+                              None if vp is None else vp * ratio, timings)
         top = [int(i) for i in idx[: self.n_candidates]]
         matched = [self._prepared(i, features=True) for i in top[: self.n_matched]]
         verifiers = matched + [self._prepared(i, features=False) for i in top[self.n_matched:]]

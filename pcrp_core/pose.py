@@ -23,6 +23,7 @@ from pcrp_core.registration import fit_quality_batch, icp_batch, ransac
 from pcrp_core.registration.icp import transform_batch
 from pcrp_core.registration.correspondences import matches_within_halves
 from pcrp_core.symmetry import principal_axes, split_halves
+from pcrp_core.timing import Clock
 from pcrp_core.visibility import visible_from
 
 FLIPS = np.array([np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0])])
@@ -131,17 +132,21 @@ def _mean_distance(src, Rs, ts, tree):
     return d.reshape(len(Rs), -1).mean(1)
 
 
-def _ransac_seeds(query: Prepared, gallery: Prepared, opts: PoseOptions, rng):
+def _ransac_seeds(query: Prepared, gallery: Prepared, opts: PoseOptions, rng, clock: Clock):
     if opts.symmetry_split:
         settings = [(query.halves, gallery.halves, True), (query.halves, gallery.halves, False)]
     else:
         settings = [(np.ones(len(query.sampled), bool), np.ones(len(gallery.sampled), bool), True)]
+    seeds = []
     for qh, gh, same in settings:
         qi, gi, _ = matches_within_halves(query.features, gallery.features, qh, gh, same)
+        clock.lap("correspondences")
         if len(qi) >= 3:
             R, t, _ = ransac(query.sampled[qi], gallery.sampled[gi], opts.ransac_threshold,
                              opts.ransac_iterations, rng)
-            yield R, t, "ransac"
+            seeds.append((R, t, "ransac"))
+        clock.lap("ransac")
+    return seeds
 
 
 def _flip(R, t, centre):
@@ -153,8 +158,13 @@ def _flip(R, t, centre):
 class Registrar:
     """Holds the query's subsample used for ICP and scoring, so it is drawn once per query."""
 
-    def __init__(self, query: Prepared, opts: PoseOptions, rng: np.random.Generator, viewpoint=None):
+    def __init__(self, query: Prepared, opts: PoseOptions, rng: np.random.Generator, viewpoint=None,
+                 timings: dict | None = None):
+        """timings, when given, gets seconds added per stage: correspondences, ransac,
+        hypotheses (principal axes, flips, their coarse ICP), verification (the vote) and
+        refinement (final ICP and averaging)."""
         self.query, self.opts, self.rng = query, opts, rng
+        self.clock = Clock(timings)
         self.viewpoint = viewpoint
         src = query.sampled if query.sampled is not None else query.points
         if len(src) > opts.icp_points:
@@ -206,7 +216,8 @@ class Registrar:
 
     def seeds(self, gallery: Prepared):
         """Coarsely refined hypotheses for one feature-bearing gallery object."""
-        seeds = list(_ransac_seeds(self.query, gallery, self.opts, self.rng)) if gallery.features is not None else []
+        self.clock.lap("hypotheses")
+        seeds = _ransac_seeds(self.query, gallery, self.opts, self.rng, self.clock) if gallery.features is not None else []
         if self.opts.pca_hypotheses or not seeds:
             seeds += list(_pca_seeds(self.query.points, gallery.points, self.coarse_src, gallery.tree,
                                      self.opts.pca_seeds, self.opts.pca_prefilter))
@@ -216,6 +227,7 @@ class Registrar:
             best = min(hyps, key=lambda h: h.chamfer)
             Rs, ts = zip(*_flip(best.R, best.t, gallery.points.mean(0)))
             hyps += self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, [best.source + "+flip"] * len(Rs))
+        self.clock.lap("hypotheses")
         return hyps
 
     def _final(self, hyp: Hypothesis, gallery: Prepared, vote: Hypothesis) -> Hypothesis:
@@ -235,6 +247,7 @@ class Registrar:
         matched: the first retrieved objects, with features, that seed hypotheses;
         verifiers: all top retrieved objects (matched first) that vote on them.
         """
+        self.clock.lap("gallery_features")   # what the caller spent preparing the candidates
         pool = []
         seeders = verifiers if self.opts.seed_all_candidates else matched
         for g in seeders:
@@ -243,7 +256,9 @@ class Registrar:
         pool = _distinct(sorted(pool, key=lambda h: h.chamfer), self.opts.pool_size)
         if not self.opts.consensus or len(verifiers) == 1:
             best = min(pool, key=lambda h: h.chamfer)
-            return 0, self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source, coarse=False)
+            final = self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source, coarse=False)
+            self.clock.lap("refinement")
+            return 0, final
         # chamfer of each hypothesis on each candidate, after a short refinement there
         Rs, ts = [h.R for h in pool], [h.t for h in pool]
         votes = [self.refine_many(Rs, ts, g, self.opts.vote_icp_iterations, [""] * len(pool)) for g in verifiers]
@@ -252,10 +267,13 @@ class Registrar:
         # candidates decides between near-symmetric flips that one instance happens to suit
         k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch, axis=1)))
         best = pool[k]
+        self.clock.lap("verification")
         refined = [self._final(best, g, row[k]) for g, row in zip(verifiers, votes)]
         j = int(np.argmin([h.chamfer for h in refined]))
         avg = _average(refined, refined[j])
-        return j, self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
+        final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
+        self.clock.lap("refinement")
+        return j, final
 
 
 def _resumed(vote: Hypothesis, source: str) -> Hypothesis:

@@ -2,11 +2,11 @@
 import sys
 
 from pcrp_core import cli as core_cli
-from pcrp_ros import bag_commands, robustness, soak
+from pcrp_ros import bag_commands, bench, robustness, soak
 
 
 def main(argv=None):
-    parser = core_cli.build_parser(extensions=[bag_commands.register, soak.register, robustness.register])
+    parser = core_cli.build_parser(extensions=[bag_commands.register, soak.register, robustness.register, bench.register])
     return core_cli.run(parser, argv)
 
 

@@ -20,6 +20,7 @@ from pcrp_core.features.neighbours import knn
 from pcrp_core.features.octants import octant_coordinates, octant_means
 from pcrp_core.features.saab import ChannelwiseSaab, Saab
 from pcrp_core.preprocess import farthest_point_sampling
+from pcrp_core.timing import Clock
 
 HOP1_ATTRIBUTES = ("fpfh", "octant")
 
@@ -52,10 +53,13 @@ class PointHop:
 
     def _hop2_octants(self, points, tree, hop1_responses, viewpoint=None):
         sampled = farthest_point_sampling(points, max(1, int(round(len(points) * self.sample_ratio))))
+        return sampled, self._octants_at(points, tree, sampled, hop1_responses, viewpoint)
+
+    def _octants_at(self, points, tree, sampled, hop1_responses, viewpoint=None):
         centres = points[sampled]
         nb = knn(points, centres, self.k2, tree)
         frames = local_frames(points, centres, nb, points.mean(axis=0), viewpoint)
-        return sampled, octant_means(points, centres, nb, frames, hop1_responses)
+        return octant_means(points, centres, nb, frames, hop1_responses)
 
     # -- estimator ----------------------------------------------------------------------
     def fit(self, clouds) -> "PointHop":
@@ -74,13 +78,23 @@ class PointHop:
         self.n_features_ = self.saab1_.n_components_ + self.saab2_.n_components_
         return self
 
-    def transform(self, points: np.ndarray, viewpoint: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def transform(self, points: np.ndarray, viewpoint: np.ndarray | None = None,
+                  timings: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(sampled indices (M,), features (M, D)) of one normalised cloud. viewpoint: the
-        sensor's position in the same coordinates, for one-sided views (see fpfh.oriented_normals)."""
+        sensor's position in the same coordinates, for one-sided views (see fpfh.oriented_normals).
+        timings, when given, gets the seconds of each step added under fpfh (or octant), hop1,
+        sampling and hop2."""
+        clock = Clock(timings)
         tree = cKDTree(points)
-        h1 = self.saab1_.transform(self._hop1_attributes(points, tree, viewpoint))
-        sampled, octs = self._hop2_octants(points, tree, h1, viewpoint)
+        attrs = self._hop1_attributes(points, tree, viewpoint)
+        clock.lap(self.hop1)
+        h1 = self.saab1_.transform(attrs)
+        clock.lap("hop1")
+        sampled = farthest_point_sampling(points, max(1, int(round(len(points) * self.sample_ratio))))
+        clock.lap("sampling")
+        octs = self._octants_at(points, tree, sampled, h1, viewpoint)
         h2 = self.saab2_.transform(octs)
+        clock.lap("hop2")
         return sampled, np.concatenate([h1[sampled], h2], axis=1).astype(np.float32)
 
     # -- model files ------------------------------------------------------------------------
