@@ -17,7 +17,7 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, HistoryPolicy, qos_profile_sensor_data
 from sensor_msgs.msg import PointCloud2
@@ -202,18 +202,23 @@ class PcrpNode(Node):
 
 def main(args=None) -> int:
     rclpy.init(args=args)
+    # The executor exists before the node says it is listening: a Ctrl-C that lands while an
+    # executor is being built leaves a half-made object whose __del__ prints a traceback.
+    executor = SingleThreadedExecutor()
+    node = None
     try:
         node = PcrpNode()
+        executor.add_node(node)
+        executor.spin()
     except (ModelError, ValueError) as e:
         print(f"pcrp_node: error: {e}", file=sys.stderr)
-        rclpy.try_shutdown()
         return 1
-    try:
-        rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        node.destroy_node()
+        executor.shutdown()
+        if node is not None:
+            node.destroy_node()
         rclpy.try_shutdown()
     return 0
 

@@ -156,14 +156,18 @@ def test_a_bag_replayed_to_the_node_is_answered_with_its_stamps(model, tmp_path)
         assert all((p.header.stamp.sec, p.header.stamp.nanosec) in sent for p in listen.poses)
 
 
-def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly():
+def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path):
     import signal
     import subprocess
     import sys
     import time
     from pathlib import Path
-    config = Path(__file__).resolve().parents[1] / "config" / "pcrp.yaml"
-    proc = subprocess.Popen([sys.executable, "-m", "pcrp_ros.node", "--ros-args", "--params-file", str(config)],
+    shipped = (Path(__file__).resolve().parents[1] / "config" / "pcrp.yaml").read_text()
+    config = tmp_path / "pcrp.yaml"
+    config.write_text(shipped.replace('input_topics: ["segmented_object"]', 'input_topics: ["cam_a/object"]'))
+    # renamed, as a second or scaled-out instance would be: the file must still apply
+    proc = subprocess.Popen([sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-r", "__node:=pcrp_node_1",
+                             "--params-file", str(config)],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines = []
     try:
@@ -173,7 +177,7 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly():
             if not line:
                 break
             lines.append(line)
-        assert any("listening on /segmented_object" in line for line in lines), lines
+        assert any("listening on /cam_a/object" in line for line in lines), lines
         proc.send_signal(signal.SIGINT)
         assert proc.wait(timeout=20) == 0
     finally:
