@@ -10,6 +10,8 @@ one-sided view looks smaller than the object).
 """
 from __future__ import annotations
 
+import copy
+
 import time
 from collections import OrderedDict
 from pathlib import Path
@@ -124,6 +126,25 @@ class PCRP:
     def gallery_cloud(self, gallery_id: str) -> np.ndarray:
         """The gallery object's points in its own canonical frame and units."""
         return self.gallery.clouds[self.gallery.index[gallery_id]]
+
+    def subset(self, gallery_ids) -> "PCRP":
+        """The same kernels and codebook over part of the gallery (one category, the objects a
+        task can meet): retrieval and verification then consider only those objects."""
+        keep = sorted({self.gallery.index[g] for g in gallery_ids})
+        if not keep:
+            raise ValueError("a gallery subset needs at least one object")
+        remap = np.full(len(self.gallery), -1)
+        remap[keep] = np.arange(len(keep))
+        rows = np.isin(self.gallery.owners, keep)
+        g = self.gallery
+        gallery = Gallery([g.ids[i] for i in keep], [g.categories[i] for i in keep], [g.clouds[i] for i in keep],
+                          g.vectors[rows], remap[g.owners[rows]])
+        model = PCRP(self.pointhop, self.vlad, gallery, self.unit, self.meta, self.n_points)
+        model.pose_options = copy.deepcopy(self.pose_options)
+        for name in ("n_candidates", "n_matched", "min_score", "min_points", "max_points", "scale_mode", "seed",
+                     "cache_size"):
+            setattr(model, name, getattr(self, name))
+        return model
 
     # -- building -------------------------------------------------------------------------------
     @classmethod

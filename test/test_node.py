@@ -166,7 +166,9 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path
     config = tmp_path / "pcrp.yaml"
     config.write_text(shipped.replace('input_topics: ["segmented_object"]', 'input_topics: ["cam_a/object"]'))
     # renamed, as a second or scaled-out instance would be: the file must still apply
-    proc = subprocess.Popen([sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-r", "__node:=pcrp_node_1",
+    entry = ("import faulthandler, signal, sys; faulthandler.register(signal.SIGUSR1, all_threads=True); "
+             "from pcrp_ros.node import main; sys.exit(main())")
+    proc = subprocess.Popen([sys.executable, "-c", entry, "--ros-args", "-r", "__node:=pcrp_node_1",
                              "--params-file", str(config)],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines = []
@@ -179,7 +181,15 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path
             lines.append(line)
         assert any("listening on /cam_a/object" in line for line in lines), lines
         proc.send_signal(signal.SIGINT)
-        assert proc.wait(timeout=20) == 0
+        try:
+            proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.send_signal(signal.SIGUSR1)   # faulthandler: every thread's stack, to see where it hangs
+            time.sleep(2)
+            proc.kill()
+            pytest.fail("the node did not stop within 20 s of Ctrl-C; its output and threads:\n"
+                        + "".join(lines) + proc.stdout.read()[-6000:])
+        assert proc.returncode == 0
     finally:
         if proc.poll() is None:
             proc.kill()

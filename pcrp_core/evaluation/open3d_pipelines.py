@@ -18,6 +18,12 @@ DISTANCE = 0.075      # correspondence distance for FGR/RANSAC, in unit-sphere u
 ICP_DISTANCE = 0.05
 
 
+def quiet() -> None:
+    """Open3D warns on every FGR run whose mutual filter leaves few matches; an evaluation of
+    hundreds of runs would drown its progress in them."""
+    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+
+
 def with_fpfh(points: np.ndarray):
     """(point cloud with oriented normals, its FPFH): what an Open3D user computes per cloud."""
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.asarray(points, dtype=np.float64)))

@@ -23,10 +23,11 @@ def sensor_view(points: np.ndarray, camera: np.ndarray, rng: np.random.Generator
 
 
 def partial_view(points: np.ndarray, rng: np.random.Generator, noise_sigma: float = 0.005,
-                 min_keep: float = 0.25, distance: float = 3.0, tries: int = 10) -> np.ndarray:
+                 min_keep: float = 0.25, distance: float = 3.0, tries: int = 10, with_camera: bool = False):
     """The side of the object seen from a random direction at `distance` object radii, with
     Gaussian noise of noise_sigma (in object radii) along each viewing ray. Retries another
-    direction when less than min_keep of the points would be seen."""
+    direction when less than min_keep of the points would be seen. with_camera: return
+    (points, camera position) instead."""
     centre = points.mean(0)
     radius = np.linalg.norm(points - centre, axis=1).max()
     for _ in range(tries):
@@ -35,7 +36,8 @@ def partial_view(points: np.ndarray, rng: np.random.Generator, noise_sigma: floa
         idx = visible_from(points, camera)
         if len(idx) >= min_keep * len(points):
             break
-    return sensor_view(points, camera, rng, noise_sigma * radius)
+    seen = sensor_view(points, camera, rng, noise_sigma * radius)
+    return (seen, camera) if with_camera else seen
 
 
 def crop_half_plane(points: np.ndarray, rng: np.random.Generator, keep: float = 0.7) -> np.ndarray:

@@ -1,0 +1,56 @@
+"""The methods each table compares, each answering "where is the gallery object in the query?"
+as (R, t) with p_query = R @ p_gallery + t."""
+from __future__ import annotations
+
+import copy
+import time
+
+import numpy as np
+
+from pcrp_core.pose import PoseOptions, Registrar, prepare
+
+# The paper's registration: feature matches within the symmetry halves, Procrustes in RANSAC,
+# the best-fitting of those hypotheses; one retrieved object, no principal-axis or half-turn
+# hypotheses, no candidate vote, no ICP.
+PAPER_OPTIONS = PoseOptions(pca_hypotheses=False, flips=False, refine=False, consensus=False,
+                            seed_all_candidates=False)
+
+
+def paper_variant(model):
+    """The model configured as the paper describes PCRP (top-1 retrieval, no rejection); it
+    shares the model's gallery and its cache of prepared gallery objects."""
+    m = copy.copy(model)
+    m.pose_options = copy.deepcopy(PAPER_OPTIONS)
+    m.n_candidates, m.n_matched, m.min_score = 1, 1, 0.0
+    return m
+
+
+def _prepared(pointhop, unit: float, points: np.ndarray):
+    centre = points.mean(0)
+    normed = (points - centre) / unit
+    return centre, prepare(normed, *pointhop.transform(normed))
+
+
+def register_pair(pointhop, unit: float, gallery_points: np.ndarray, query_points: np.ndarray,
+                  options: PoseOptions, seed: int = 0):
+    """Register one known object to a moved copy of it (the registration table): both described
+    by the given point features, then the pose stage with the given options."""
+    c_g, g = _prepared(pointhop, unit, np.asarray(gallery_points, dtype=np.float64))
+    c_q, q = _prepared(pointhop, unit, np.asarray(query_points, dtype=np.float64))
+    _, h = Registrar(q, options, np.random.default_rng(seed)).best_pose([g], [g])
+    # g_n = R' q_n + t'  =>  q = R'^T g + c_q - R'^T (c_g + unit t')
+    R = h.R.T
+    return R, c_q - R @ (c_g + unit * h.t)
+
+
+def open3d_pose(fn, query_points: np.ndarray, target) -> tuple[np.ndarray, np.ndarray]:
+    """An Open3D pipeline's answer in the same convention (it moves the query onto the target)."""
+    T = fn(np.asarray(query_points, dtype=np.float64), target)
+    R = T[:3, :3].T
+    return R, -R @ T[:3, 3]
+
+
+def timed(fn, *args, **kw):
+    t0 = time.perf_counter()
+    out = fn(*args, **kw)
+    return out, time.perf_counter() - t0

@@ -1,0 +1,45 @@
+"""The models the evaluation needs, built once with `PCRP.build` and kept in a cache folder, and
+loaded once per worker process."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from pcrp_core.pipeline import PCRP
+from pcrp_core.sources import load_sources
+
+_LOADED: dict[str, PCRP] = {}
+_SUBSETS: dict[tuple, PCRP] = {}
+
+
+def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | None, progress=None,
+                 n_jobs: int | None = None, log=print) -> Path:
+    """The model of these categories' train splits (at most `limit` objects each), built with the
+    package's defaults and seed 0, reused while its recipe is unchanged."""
+    path = Path(cache) / name
+    recipe = {"categories": list(categories), "limit": limit, "data": str(Path(data).resolve())}
+    stamp = path / "eval_recipe.json"
+    if stamp.is_file() and json.loads(stamp.read_text()) == recipe:
+        return path
+    objects = load_sources([str(Path(data) / f"{c}.npz") for c in categories], split="train", limit_per_category=limit)
+    log(f"building {name}: {len(objects)} train objects of {len(categories)} categories")
+    model = PCRP.build(objects, sources=[f"{c}.npz" for c in categories], progress=progress, n_jobs=n_jobs)
+    model.save(path)
+    stamp.write_text(json.dumps(recipe))
+    return path
+
+
+def loaded(path) -> PCRP:
+    key = str(path)
+    if key not in _LOADED:
+        _LOADED[key] = PCRP.load(key)
+    return _LOADED[key]
+
+
+def category_model(path, category: str) -> PCRP:
+    """The model searching only one category's objects (the paper's per-category galleries)."""
+    key = (str(path), category)
+    if key not in _SUBSETS:
+        model = loaded(path)
+        _SUBSETS[key] = model.subset([g for g, c in zip(model.gallery.ids, model.gallery.categories) if c == category])
+    return _SUBSETS[key]

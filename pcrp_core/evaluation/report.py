@@ -1,0 +1,286 @@
+"""RESULTS.md: every table with the paper's figures beside ours, the CDF plot, example pictures."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from pcrp_core.evaluation import pose_table, registration_table, retrieval_table
+from pcrp_core.evaluation.protocol import PAPER_CATEGORIES, PLANE_KEEP, VIEW_NOISE
+
+# The paper's figures (Kadam, Zhou, Liu, Kuo), as the issue quotes them.
+PAPER_REGISTRATION = {"rotation": {"mse": 2.68, "rmse": 1.64, "mae": 0.33},
+                      "translation": {"mse": 0.0002, "rmse": 0.0149, "mae": 0.0007}}
+PAPER_RETRIEVAL = {"aligned": {"pcrp_vlad": (63.23, 0.101), "fpfh_vlad": (53.23, 0.164)},
+                   "arbitrary": {"pcrp_vlad": (63.07, 0.111), "fpfh_vlad": (52.12, 0.160)}}
+PAPER_POSE = {"chair": (14.42, 4.24), "airplane": (2.98, 1.65), "car": (11.22, 2.11), "sofa": (8.84, 2.29)}
+CHEN_POSE = {"chair": (8.56, 3.87), "airplane": (3.35, 1.12), "car": (9.48, 1.85), "sofa": (4.76, 1.56)}
+RATIO = 63.23 / 53.23
+CLASSICAL = ("icp", "fgr_icp", "ransac_icp")
+NOTES = """\
+- **This copy of ModelNet40 is not consistently aligned for cars and airplanes.** About a third of them
+  are turned 90° about z relative to the rest (a car's length lies along x in 67 of the 197 training
+  cars and along y in the others). Any method that reads a pose off a *different* gallery instance
+  inherits that 90° on those queries, so car and airplane means carry errors no registration can
+  remove; the share under 5° / 10° and the median say more there.
+- **Chairs and sofas are nearly symmetric front to back.** The remaining large errors are mostly
+  half turns (about 180°) of the right pose: box-like sofas upside down, chairs back to front. The
+  candidate vote and the half-turn hypotheses are what this package adds against them.
+- **The paper's numbers used 2048 points** and do not say which range of rotations its ICP and FGR
+  rows used; under uniform rotations the classical pipelines are far worse than the paper's table,
+  under the narrower protocol (each Euler angle in [0°, 45°]) much closer to it.
+- **Rejection is a trade.** The default threshold refuses a share of the queries whose category is in
+  the gallery; most refused answers would have been wrong, and a robot can ask again from another view.
+  `min_score` moves the trade either way."""
+
+
+def _f(x, nd=2):
+    return "–" if x is None or (isinstance(x, float) and np.isnan(x)) else f"{x:.{nd}f}"
+
+
+def _g(x):
+    """Three significant figures: registration errors span from 1e-12 (exact) to tens of degrees."""
+    return "–" if x is None or np.isnan(x) else ("0" if x == 0 else f"{x:.3g}")
+
+
+def _pct(x):
+    return "–" if x is None else f"{100 * x:.0f} %"
+
+
+def registration_md(reg: dict) -> list[str]:
+    lines = []
+    for cut, title in (("full", "Full objects"), ("partial", f"Partial objects ({int(PLANE_KEEP * 100)} % of the "
+                                                               "points, on one side of a random plane)")):
+        if cut not in reg:
+            continue
+        lines += [f"**{title}**", "",
+                  "| method | rotation MSE | RMSE | MAE (°) | translation MSE | RMSE | MAE | median ms |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for m, d in reg[cut].items():
+            r, t = d["rotation"], d["translation"]
+            lines.append(f"| {registration_table.METHODS[m]} | {_g(r['mse'])} | {_g(r['rmse'])} | {_g(r['mae'])} | "
+                         f"{_g(t['mse'])} | {_g(t['rmse'])} | {_g(t['mae'])} | {d['median_ms']:.0f} |")
+        if cut == "full":
+            r, t = PAPER_REGISTRATION["rotation"], PAPER_REGISTRATION["translation"]
+            lines.append(f"| *paper: FR-PointHop* | *{r['mse']}* | *{r['rmse']}* | *{r['mae']}* | *{t['mse']}* | "
+                         f"*{t['rmse']}* | *{t['mae']}* | |")
+        lines.append("")
+    return lines
+
+
+def retrieval_md(ret: dict) -> list[str]:
+    lines = ["| setting | method | P@10 strict | P@10 CORSAIR | top-1 chamfer | paper P@10 / chamfer |",
+             "|---|---|---|---|---|---|"]
+    for setting in ("aligned", "arbitrary"):
+        if setting not in ret:
+            continue
+        d = ret[setting]
+        for m in retrieval_table.METHODS:
+            paper = PAPER_RETRIEVAL[setting].get(m)
+            lines.append(f"| {setting} | {retrieval_table.METHODS[m]} | {_pct(d[m]['p10_strict'])} | "
+                         f"{_pct(d[m]['p10_corsair'])} | {d[m]['top1_chamfer']:.3f} | "
+                         f"{f'{paper[0]} % / {paper[1]}' if paper else ''} |")
+        lines.append(f"| {setting} | *the gallery's true nearest / a random pick* | | | "
+                     f"*{d['best_top1_chamfer']:.3f} / {d['random_top1_chamfer']:.3f}* | |")
+    return lines + [""]
+
+
+def pose_md(summary: dict, methods, paper: bool = True) -> list[str]:
+    lines = ["| category | method | mean ° | median ° | < 5° | < 10° | < 30° | median ms |",
+             "|---|---|---|---|---|---|---|---|"]
+    for cat in list(PAPER_CATEGORIES) + ["all"]:
+        if cat not in summary:
+            continue
+        for m in methods:
+            d = summary[cat].get(m)
+            if not d:
+                continue
+            lines.append(f"| {cat} | {pose_table.METHODS[m]} | {d['mean']:.2f} | {d['median']:.2f} | "
+                         f"{_pct(d['under_5'])} | {_pct(d['under_10'])} | {_pct(d['under_30'])} | {d['median_ms']:.0f} |")
+        if paper and cat in PAPER_POSE:
+            lines.append(f"| {cat} | *paper: PCRP* | *{PAPER_POSE[cat][0]}* | *{PAPER_POSE[cat][1]}* | | | | |")
+            lines.append(f"| {cat} | *paper: best learned (Chen et al.)* | *{CHEN_POSE[cat][0]}* | "
+                         f"*{CHEN_POSE[cat][1]}* | | | | |")
+    return lines + [""]
+
+
+def bar(res: dict) -> list[str]:
+    """The issue's bar, each line measured against this run."""
+    out = []
+    uni = res.get("pose", {}).get("uniform", {}).get("summary")
+    if uni:
+        for cat in PAPER_CATEGORIES:
+            d = uni.get(cat, {})
+            if "pcrp" not in d:
+                continue
+            ours = d["pcrp"]
+            best = min((m for m in CLASSICAL if m in d), key=lambda m: d[m]["median"])
+            beat_paper = ours["mean"] < PAPER_POSE[cat][0] and ours["median"] < PAPER_POSE[cat][1]
+            beat_classic = ours["mean"] < d[best]["mean"] and ours["median"] < d[best]["median"]
+            out.append(f"| pose, {cat}, uniform rotations | mean / median {ours['mean']:.1f}° / {ours['median']:.1f}° "
+                       f"vs paper {PAPER_POSE[cat][0]}° / {PAPER_POSE[cat][1]}° and {pose_table.METHODS[best]} "
+                       f"{d[best]['mean']:.1f}° / {d[best]['median']:.1f}° | paper: {'yes' if beat_paper else '**no**'}; "
+                       f"classical: {'yes' if beat_classic else '**no**'} |")
+    ret = res.get("retrieval")
+    if ret:
+        for setting in ("aligned", "arbitrary"):
+            d = ret[setting]
+            for key, name in (("p10_strict", "strict"), ("p10_corsair", "CORSAIR")):
+                ratio = d["pcrp_vlad"][key] / max(d["fpfh_vlad"][key], 1e-9)
+                out.append(f"| retrieval, {setting}, P@10 {name} | PCRP {_pct(d['pcrp_vlad'][key])} vs FPFH + VLAD "
+                           f"{_pct(d['fpfh_vlad'][key])}: {ratio:.2f}× (needed {RATIO:.2f}×) | "
+                           f"{'yes' if ratio >= RATIO else '**no**'} |")
+            lower = d["pcrp_vlad"]["top1_chamfer"] < d["fpfh_vlad"]["top1_chamfer"]
+            out.append(f"| retrieval, {setting}, top-1 chamfer | PCRP {d['pcrp_vlad']['top1_chamfer']:.3f} vs FPFH + VLAD "
+                       f"{d['fpfh_vlad']['top1_chamfer']:.3f} | {'yes' if lower else '**no**'} |")
+    if not out:
+        return []
+    return ["| bar | measured | met |", "|---|---|---|"] + out + [""]
+
+
+def cdf_plot(res: dict, path: Path) -> bool:
+    uni = res.get("pose", {}).get("uniform")
+    if not uni:
+        return False
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = uni["rows"]
+    fig, axes = plt.subplots(1, 4, figsize=(16, 3.6), sharey=True)
+    for ax, cat in zip(axes, PAPER_CATEGORIES):
+        sel = [r for r in rows if r["category"] == cat]
+        for m in pose_table.METHODS:
+            if sel and m in sel[0]:
+                e = np.sort([r[m]["error"] for r in sel])
+                ax.step(e, np.arange(1, len(e) + 1) / len(e), where="post", label=m)
+        ax.set_xscale("log")
+        ax.set_xlim(0.3, 180)
+        ax.set_title(cat)
+        ax.set_xlabel("rotation error (°)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("share of queries")
+    axes[-1].legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
+
+
+def examples_plot(res: dict, s, path: Path) -> bool:
+    """One query per category (uniform rotation, default method), with the retrieved object moved
+    onto it by the estimated pose."""
+    from pcrp_core.evaluation.models import category_model
+    from pcrp_core.evaluation.protocol import queries
+    model_path = res.get("model4", {}).get("path")
+    if not model_path or "pose" not in res:
+        return False
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig = plt.figure(figsize=(16, 4.2))
+    for k, cat in enumerate(PAPER_CATEGORIES):
+        q = queries(s.data, [cat], "pose-uniform", s.seed, 1)[0]
+        r = category_model(model_path, cat).estimate(q.points)
+        g = category_model(model_path, cat).gallery_cloud(r.gallery_id).astype(np.float64)
+        aligned = g @ r.rotation.T * r.scale + r.translation
+        ax = fig.add_subplot(1, 4, k + 1, projection="3d")
+        ax.scatter(*q.points.T, s=1, c="tab:blue", label="query")
+        ax.scatter(*aligned.T, s=1, c="tab:orange", label=f"{r.gallery_id}, aligned")
+        err = np.degrees(np.arccos(np.clip((np.trace(r.rotation.T @ q.R) - 1) / 2, -1, 1)))
+        ax.set_title(f"{q.name}: error {err:.1f}°, score {r.score:.2f}", fontsize=9)
+        ax.set_axis_off()
+        ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
+
+
+def write_report(s, res: dict) -> Path:
+    out = Path(s.out)
+    per = res["per_category"] or "all"
+    sec = res["seconds"]
+    flags = ("" if res["per_category"] is None or res["quick"] else f" --per-category {res['per_category']}") + \
+        (" --quick" if res["quick"] else "")
+    lines = ["# Evaluation on ModelNet40: the paper's experiments, the baselines beside them", "",
+             f"Regenerate with `pcrp eval --data ../shared/data/modelnet40 --out docs/results --seed {res['seed']}"
+             f"{flags}`. Run {res['date']} on {res['machine']['cores']} cores "
+             f"({res['machine']['cpu']}), {sec.get('total', 0) / 60:.0f} minutes in all. Test objects per category: "
+             f"{per}; every random rotation, translation, point order, cut and viewpoint comes from seed "
+             f"{res['seed']} (run with `--seed N` to draw others).", "",
+             "Data: `../shared/data/modelnet40`, 1024 points per object where the paper had 2048. Gallery: the "
+             f"train split of airplane, chair, sofa and car ({res['model4']['objects']} objects), built with the "
+             "package's defaults (`pcrp build`, seed 0); queries: their test split. Rotation error: the geodesic "
+             "angle between estimated and true rotation. Times are per query, one core each "
+             "(queries run in parallel, one per core).", ""]
+    b = bar(res)
+    if b:
+        lines += ["## The bar", "", *b]
+    if "pose" in res and "uniform" in res["pose"]:
+        lines += ["## Pose estimation (the paper's Table 3)", "",
+                  "Each test object under a uniformly random rotation and a translation in [-0.5, 0.5]³, its points "
+                  "shuffled; gallery: the train split of its category. The classical pipelines register to the "
+                  "object PCRP retrieved (its FPFH computed beforehand, untimed), so only the registration differs.", "",
+                  *pose_md(res["pose"]["uniform"]["summary"], pose_table.METHODS)]
+        if cdf_plot(res, out / "pose_cdf.png"):
+            lines += ["![Rotation error CDF per category and method](pose_cdf.png)", ""]
+        if examples_plot(res, s, out / "pose_examples.png"):
+            lines += ["Queries (blue) with the retrieved gallery object moved onto them by the estimated pose "
+                      "(orange):", "", "![Examples](pose_examples.png)", ""]
+    if "pose" in res and "euler45" in res["pose"]:
+        lines += ["### The narrower protocol: each Euler angle in [0°, 45°]", "",
+                  *pose_md(res["pose"]["euler45"]["summary"], pose_table.METHODS, paper=False)]
+    if "pose" in res and "view" in res["pose"]:
+        lines += ["## Partial views: what a depth camera sees", "",
+                  "Each query cut to the points a sensor 3 radii away in a random direction sees, with range noise "
+                  f"of {VIEW_NOISE} radii along each ray; the sensor's position is given to PCRP (as the node does for "
+                  "clouds in the camera frame). Gallery: the train split of the query's category.", "",
+                  *pose_md(res["pose"]["view"]["summary"], ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"), paper=False)]
+    if "registration" in res:
+        lines += ["## Registration (the paper's Table 1)", "",
+                  "Each test object registered to a copy of itself under a random rotation (each Euler angle uniform "
+                  "in [0°, 45°]) and translation (uniform in [-0.5, 0.5] per axis), points shuffled. Errors are over "
+                  "the three x-y-z Euler angles (degrees) and the three translation components. The partial copy "
+                  "keeps one side of a random plane, the whole object is the target.", "",
+                  *registration_md(res["registration"])]
+    if "retrieval" in res:
+        lines += ["## Retrieval (the paper's Table 2)", "",
+                  "Each query searches the train split of its category. Ground truth: that gallery ranked by the "
+                  "chamfer distance to the unrotated query, where chamfer(A, B) = mean over A of the distance to the "
+                  "nearest point of B, plus the same from B to A (unit-sphere radii, on 512 of each object's points). "
+                  "P@10 strict: the share of the method's top 10 among the 10 nearest by chamfer; CORSAIR's: the share "
+                  "among the nearest 10 % of the gallery. Top-1 chamfer: from the query to the first object retrieved. "
+                  "Arbitrary: uniformly random rotation and translation.", "",
+                  *retrieval_md(res["retrieval"])]
+    if "large" in res:
+        lg = res["large"]
+        lines += ["## A larger gallery: all 40 categories", "",
+                  f"Gallery: the train split of all 40 categories ({lg['objects']} objects); queries: the four "
+                  "categories' test objects under uniform rotations, searched over the whole gallery.", "",
+                  "| category | category right | mean ° | median ° | < 10° | rejected | median ms |", "|---|---|---|---|---|---|---|"]
+        for cat in list(PAPER_CATEGORIES) + ["all"]:
+            d = lg["summary"].get(cat)
+            if d and "pcrp" in d:
+                p = d["pcrp"]
+                lines.append(f"| {cat} | {_pct(d['category_accuracy'])} | {p['mean']:.2f} | {p['median']:.2f} | "
+                             f"{_pct(p['under_10'])} | {_pct(d['rejected'])} | {p['median_ms']:.0f} |")
+        lines.append("")
+    if "rejection" in res:
+        rj = res["rejection"]
+        lines += ["## Rejection: objects the gallery does not hold", "",
+                  f"The four-category gallery, default threshold (fit score below {rj['min_score']} is rejected). "
+                  f"Queries of the four categories ({rj['inside_n']}) and of "
+                  f"{', '.join(rj['outside'])} ({sum(v['n'] for v in rj['outside'].values())}), uniform rotations. "
+                  f"An answer is right when its category is and its rotation error is under {pose_table.RIGHT_DEG:.0f}°.", "",
+                  "| queries | measured |", "|---|---|",
+                  *[f"| {c} (not in the gallery) | {_pct(v['rejected'])} rejected |" for c, v in rj["outside"].items()],
+                  f"| gallery categories: rejected | {_pct(rj['inside_rejected'])} ({_pct(rj['inside_right_but_rejected'])} "
+                  f"of all were right, {_pct(rj['inside_wrong_and_rejected'])} wrong) |",
+                  f"| gallery categories: wrong but accepted | {_pct(rj['inside_wrong_but_accepted'])} |",
+                  f"| gallery categories: right among accepted | {_pct(rj['inside_right_among_accepted'])} |", ""]
+    lines += ["## Reading these figures", "", NOTES, ""]
+    lines += ["## Run time", "", "| part | minutes |", "|---|---|",
+              *[f"| {k} | {v / 60:.1f} |" for k, v in sec.items()], ""]
+    path = out / "RESULTS.md"
+    path.write_text("\n".join(lines))
+    return path

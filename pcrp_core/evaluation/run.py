@@ -1,0 +1,183 @@
+"""`pcrp eval`: every experiment of the report, run from one seed, results to JSON and markdown."""
+from __future__ import annotations
+
+import json
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from pcrp_core.evaluation import pose_table, registration_table, retrieval_table
+from pcrp_core.evaluation.models import ensure_model, loaded
+from pcrp_core.evaluation.protocol import PAPER_CATEGORIES, make_query, queries, query_rng
+from pcrp_core.parallel import parallel_map
+
+EXPERIMENTS = ("registration", "retrieval", "pose", "partial", "large", "rejection")
+OUTSIDE_CATEGORIES = ("table", "bench", "lamp")
+
+
+class Settings:
+    def __init__(self, data, out, seed=0, per_category=None, quick=False, jobs=None, cache=None,
+                 experiments=EXPERIMENTS, progress=None, log=print):
+        self.data, self.out, self.seed = Path(data), Path(out), seed
+        self.quick = quick
+        self.per_category = per_category if per_category is not None else (3 if quick else None)
+        self.build_limit = 30 if quick else None          # train objects per category in the models
+        self.large_limit = 4 if quick else None
+        self.rejection_per_category = 3 if quick else min(self.per_category or 100, 30)
+        self.jobs, self.progress, self.log = jobs, progress, log
+        self.cache = Path(cache) if cache else Path.home() / ".cache" / "pcrp" / "eval"
+        self.experiments = tuple(experiments)
+
+    def map(self, fn, items, state, desc):
+        return parallel_map(fn, items, state, self.jobs, self.progress, desc, chunksize=4)
+
+
+def _machine() -> dict:
+    import os
+    import importlib.metadata as md
+    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")), "")
+    versions = {}
+    for pkg in ("numpy", "scipy", "scikit-learn", "open3d"):
+        try:
+            versions[pkg] = md.version(pkg)
+        except md.PackageNotFoundError:
+            pass
+    return {"cores": len(os.sched_getaffinity(0)), "cpu": cpu, "python": platform.python_version(), **versions}
+
+
+def run_registration(s: Settings, model_path) -> dict:
+    from pcrp_core.features import PointHop
+    model = loaded(model_path)
+    rng = np.random.default_rng(0)
+    fit = rng.choice(len(model.gallery), min(400, len(model.gallery)), replace=False)
+    octant = PointHop(hop1="octant", random_state=0).fit(
+        [(model.gallery.clouds[i] - model.gallery.clouds[i].mean(0)).astype(np.float64) / model.unit for i in fit])
+    state = {"octant": octant, "fpfh": model.pointhop, "unit": model.unit}
+    out = {}
+    for cut in (None, "plane"):
+        qs = queries(s.data, PAPER_CATEGORIES, f"registration-{cut}", s.seed, s.per_category, "euler45", cut)
+        rows = s.map(registration_table.register_one, qs, state, f"registration ({cut or 'full'})")
+        out["partial" if cut else "full"] = registration_table.summarise(rows)
+    return out
+
+
+def run_retrieval(s: Settings, model_path) -> dict:
+    from scipy.spatial import cKDTree
+    from pcrp_core.vlad import VLAD
+    model = loaded(model_path)
+    normed = [(c - c.mean(0)).astype(np.float64) / model.unit for c in model.gallery.clouds]
+    fit = np.random.default_rng(0).choice(len(normed), min(400, len(normed)), replace=False)
+    state = {"pointhop": model.pointhop, "vlad": model.vlad, "max": VLAD(aggregation="max"),
+             "fpfh_vlad": retrieval_table.fpfh_codebook(model.pointhop, [normed[i] for i in fit]),
+             "radius": model.pointhop.fpfh_radius}
+    gal = s.map(retrieval_table.describe, normed, state, "gallery descriptors")
+    cats = np.array(model.gallery.categories)
+    out = {}
+    for setting in ("aligned", "arbitrary"):
+        qs = []
+        for cat in PAPER_CATEGORIES:
+            for q in queries(s.data, [cat], f"retrieval-{setting}", s.seed, s.per_category):
+                if setting == "aligned":    # pre-aligned: the object as it is, its points in a random order
+                    q.points = q.canonical[query_rng(s.seed, f"retrieval-order/{q.name}", 0).permutation(len(q.canonical))]
+                qs.append(q)
+        qd = s.map(retrieval_table.describe, [(q.points - q.points.mean(0)) / model.unit for q in qs], state,
+                   f"query descriptors ({setting})")
+        rows = []
+        for cat in PAPER_CATEGORIES:
+            idx = np.flatnonzero(cats == cat)
+            clouds = [retrieval_table._sub(model.gallery.clouds[i].astype(np.float64)) for i in idx]
+            gt_state = {"clouds": clouds, "trees": [cKDTree(c) for c in clouds]}
+            vectors = {m: np.stack([gal[i][m] for i in idx]) for m in retrieval_table.METHODS}
+            for q, d in zip(qs, qd):
+                if q.category != cat:
+                    continue
+                chamfers = retrieval_table.ground_truth(gt_state, q.canonical)
+                ranked = {m: np.argsort(np.linalg.norm(vectors[m] - d[m], axis=1), kind="stable")
+                          for m in retrieval_table.METHODS}
+                rows.append(retrieval_table.scores(ranked, chamfers, query_rng(s.seed, f"random/{q.name}", 0)))
+        out[setting] = retrieval_table.summarise(rows)
+    return out
+
+
+def run_pose(s: Settings, model_path, settings) -> dict:
+    out = {}
+    for name, rotation, cut, methods in settings:
+        qs = queries(s.data, PAPER_CATEGORIES, f"pose-{name}", s.seed, s.per_category, rotation, cut)
+        state = {"model": str(model_path), "per_category": True, "methods": methods}
+        rows = s.map(pose_table.pose_one, qs, state, f"pose ({name})")
+        out[name] = {"summary": pose_table.summarise(rows, methods), "rows": rows}
+    return out
+
+
+def run_large(s: Settings, model40) -> dict:
+    qs = queries(s.data, PAPER_CATEGORIES, "pose-uniform", s.seed, s.per_category)
+    state = {"model": str(model40), "per_category": False, "methods": ("pcrp",)}
+    rows = s.map(pose_table.pose_one, qs, state, "pose (40-category gallery)")
+    model = loaded(model40)
+    return {"objects": len(model.gallery), "summary": pose_table.summarise(rows, ("pcrp",)), "rows": rows}
+
+
+def run_rejection(s: Settings, model_path) -> dict:
+    n = s.rejection_per_category
+    state = {"model": str(model_path), "per_category": False, "methods": ("pcrp",)}
+    inside = s.map(pose_table.pose_one, queries(s.data, PAPER_CATEGORIES, "rejection", s.seed, n), state,
+                   "rejection (gallery categories)")
+    outside = s.map(pose_table.pose_one, queries(s.data, OUTSIDE_CATEGORIES, "rejection", s.seed, n), state,
+                    "rejection (other categories)")
+    model = loaded(model_path)
+    return {"min_score": model.min_score, **pose_table.rejection_summary(inside, outside)}
+
+
+def run(s: Settings) -> dict:
+    t0 = time.perf_counter()
+    missing = [c for c in PAPER_CATEGORIES + OUTSIDE_CATEGORIES if not (s.data / f"{c}.npz").is_file()]
+    if missing:
+        raise FileNotFoundError(f"{s.data}: no ModelNet40 archives for {', '.join(missing)}")
+    suffix = "_quick" if s.quick else ""
+    res = {"seed": s.seed, "quick": s.quick, "per_category": s.per_category, "machine": _machine(),
+           "date": time.strftime("%Y-%m-%d %H:%M"), "command": "pcrp " + " ".join(sys.argv[1:]) if sys.argv[1:] else "",
+           "seconds": {}}
+
+    def timed(name, fn, *a):
+        t = time.perf_counter()
+        s.log(f"== {name}")
+        res[name] = fn(*a)
+        res["seconds"][name] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    model4 = ensure_model(s.cache, "model4" + suffix, s.data, PAPER_CATEGORIES, s.build_limit, s.progress, s.jobs, s.log)
+    res["seconds"]["build_model4"] = time.perf_counter() - t
+    res["model4"] = {"objects": len(loaded(model4).gallery), "path": str(model4)}
+    if "registration" in s.experiments:
+        timed("registration", run_registration, s, model4)
+    if "retrieval" in s.experiments:
+        timed("retrieval", run_retrieval, s, model4)
+    settings = []
+    if "pose" in s.experiments:
+        settings += [("uniform", "uniform", None, tuple(pose_table.METHODS)),
+                     ("euler45", "euler45", None, tuple(pose_table.METHODS))]
+    if "partial" in s.experiments:
+        settings += [("view", "uniform", "view", ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"))]
+    if settings:
+        timed("pose", run_pose, s, model4, settings)
+    if "large" in s.experiments:
+        from pcrp_core.sources.modelnet import modelnet_categories
+        t = time.perf_counter()
+        model40 = ensure_model(s.cache, "model40" + suffix, s.data, modelnet_categories(s.data), s.large_limit,
+                               s.progress, s.jobs, s.log)
+        res["seconds"]["build_model40"] = time.perf_counter() - t
+        timed("large", run_large, s, model40)
+    if "rejection" in s.experiments:
+        timed("rejection", run_rejection, s, model4)
+    res["seconds"]["total"] = time.perf_counter() - t0
+    return res
+
+
+def write(s: Settings, res: dict) -> Path:
+    from pcrp_core.evaluation import report
+    s.out.mkdir(parents=True, exist_ok=True)
+    (s.out / "results.json").write_text(json.dumps(res, indent=1, default=float))
+    return report.write_report(s, res)

@@ -1,0 +1,91 @@
+"""pcrp eval: the protocols and measures it rests on, and the command end to end on real data."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from helpers import MODELNET, modelnet, rotation_error_deg
+from pcrp_core.evaluation.metrics import chamfer, euler_errors, geodesic_deg, mse_rmse_mae, precision_at_10
+from pcrp_core.evaluation.protocol import make_query, query_rng
+
+
+def test_geodesic_and_euler_errors_measure_known_rotations():
+    R = Rotation.from_euler("xyz", [10, 20, 30], degrees=True).as_matrix()
+    assert geodesic_deg(R, R) == pytest.approx(0, abs=1e-5)
+    turn = Rotation.from_euler("z", 25, degrees=True).as_matrix()
+    assert geodesic_deg(turn @ R, R) == pytest.approx(25, abs=1e-6)
+    # 179° and -179° are 2° apart, not 358°
+    a = Rotation.from_euler("xyz", [179, 0, 0], degrees=True).as_matrix()
+    b = Rotation.from_euler("xyz", [-179, 0, 0], degrees=True).as_matrix()
+    assert np.abs(euler_errors(a, b)).max() == pytest.approx(2, abs=1e-6)
+    assert mse_rmse_mae([[3, -4], [0, 0]]) == pytest.approx({"mse": 6.25, "rmse": 2.5, "mae": 1.75})
+
+
+def test_precision_at_10_reads_both_definitions():
+    chamfers = np.arange(200, dtype=float)       # object i is the i-th nearest
+    ranked = np.r_[0:5, 15:20, 100:190]          # 5 of the 10 nearest, the rest within the nearest 10 % (20)
+    assert precision_at_10(ranked, chamfers) == (0.5, 1.0)
+    assert precision_at_10(np.arange(199, -1, -1), chamfers) == (0.0, 0.0)
+
+
+def test_chamfer_is_zero_on_the_same_cloud_and_grows_with_distance():
+    p = np.random.default_rng(0).normal(size=(300, 3))
+    assert chamfer(p, p[::-1]) == 0
+    assert chamfer(p, p + [0.1, 0, 0]) < chamfer(p, p + [0.3, 0, 0])
+
+
+def test_queries_are_fixed_by_the_seed_and_move_the_object_as_stated():
+    p = modelnet("chair", "test", 1)[0][0]
+    a = make_query("c", "chair", p, query_rng(0, "pose/c", 0), "uniform", "view")
+    b = make_query("c", "chair", p, query_rng(0, "pose/c", 0), "uniform", "view")
+    c = make_query("c", "chair", p, query_rng(1, "pose/c", 0), "uniform", "view")
+    assert np.array_equal(a.points, b.points) and not np.array_equal(a.R, c.R)
+    assert len(a.points) < len(p)                          # one side only
+    whole = make_query("c", "chair", p, query_rng(0, "x", 0), "euler45")
+    moved = p @ whole.R.T + whole.t
+    assert chamfer(whole.points, moved) < 1e-9             # the same points, shuffled
+    angles = Rotation.from_matrix(whole.R).as_euler("xyz", degrees=True)
+    assert np.all((angles >= 0) & (angles <= 45))
+
+
+def test_a_gallery_subset_answers_from_its_own_objects_only(small_model):
+    from pcrp_core import PCRP
+    model = PCRP.load(small_model)
+    sofas = [g for g, c in zip(model.gallery.ids, model.gallery.categories) if c == "sofa"]
+    sub = model.subset(sofas)
+    chair = modelnet("chair", "test", 1)[0][0]
+    assert all(g in sofas for g, _ in sub.retrieve(chair, k=5))
+    # a gallery object of the subset, moved, comes back as itself
+    R = Rotation.from_euler("xyz", [30, -50, 120], degrees=True).as_matrix()
+    r = sub.estimate(model.gallery_cloud(sofas[3]) @ R.T + [0.2, 0, -0.1])
+    assert r.gallery_id == sofas[3] and rotation_error_deg(r.rotation, R) < 2
+    with pytest.raises(ValueError):
+        model.subset([])
+
+
+@pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")
+def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
+    out = tmp_path / "results"
+    proc = subprocess.run([sys.executable, "-m", "pcrp_ros.cli", "eval", "--quick", "--data", str(MODELNET),
+                           "--out", str(out), "--cache", str(tmp_path / "cache")],
+                          capture_output=True, text=True, timeout=900, env={**__import__("os").environ, "TQDM_DISABLE": "1"})
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    text = (out / "RESULTS.md").read_text()
+    for heading in ("## The bar", "## Pose estimation", "### The narrower protocol", "## Partial views",
+                    "## Registration", "## Retrieval", "## A larger gallery", "## Rejection"):
+        assert heading in text
+    assert (out / "pose_cdf.png").stat().st_size > 10_000 and (out / "pose_examples.png").stat().st_size > 10_000
+    res = json.loads((out / "results.json").read_text())
+    # registering an object to a moved copy of its own points is exact for the feature methods
+    for m in ("r_pointhop", "fr_pointhop", "fr_pointhop_ext"):
+        assert res["registration"]["full"][m]["rotation"]["mae"] < 1.0
+    for setting in ("aligned", "arbitrary"):
+        d = res["retrieval"][setting]
+        assert d["best_top1_chamfer"] <= min(d[m]["top1_chamfer"] for m in ("pcrp_vlad", "pcrp_max", "fpfh_vlad"))
+    uniform = res["pose"]["uniform"]["summary"]
+    assert uniform["all"]["pcrp"]["n"] == 12 and set(uniform["all"]) >= {"pcrp", "pcrp_paper", "icp", "fgr_icp", "ransac_icp"}
+    # the package's extensions (candidate vote, half turns, ICP) over the paper's bare registration
+    assert uniform["all"]["pcrp"]["median"] < uniform["all"]["pcrp_paper"]["median"]
