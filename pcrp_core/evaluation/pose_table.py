@@ -51,6 +51,7 @@ def summarise(rows: list[dict], methods) -> dict:
                         "median_ms": float(np.median([r[m]["seconds"] for r in sel]) * 1e3)}
                     for m in methods if sel and m in sel[0]}
         out[cat]["category_accuracy"] = float(np.mean([r["retrieved_category"] == r["category"] for r in sel]))
+        out[cat]["object_accuracy"] = float(np.mean([r["retrieved"] == r["name"] for r in sel]))
         out[cat]["rejected"] = float(np.mean([r["rejected"] for r in sel]))
     return out
 

@@ -47,10 +47,10 @@ def random_rotation(rng: np.random.Generator, protocol: str) -> np.ndarray:
 
 
 def make_query(name: str, category: str, canonical: np.ndarray, rng: np.random.Generator,
-               rotation: str = "uniform", cut: str | None = None) -> Query:
+               rotation: str = "uniform", cut: str | None = None, noise: float = 0.0) -> Query:
     """cut: None (the whole object), 'plane' (the PLANE_KEEP share of points on one side of a
     random plane) or 'view' (what a depth camera 3 radii away in a random direction sees, with
-    range noise)."""
+    range noise). noise: Gaussian noise of that many radii added to a whole object's points."""
     canonical = np.asarray(canonical, dtype=np.float64)
     part, camera = canonical, None
     if cut == "plane":
@@ -59,6 +59,8 @@ def make_query(name: str, category: str, canonical: np.ndarray, rng: np.random.G
         part, camera = partial_view(canonical, rng, VIEW_NOISE, with_camera=True)
     elif cut is not None:
         raise ValueError(f"unknown cut {cut!r}")
+    if noise and cut is None:
+        part = canonical + rng.normal(scale=noise, size=canonical.shape)
     R = random_rotation(rng, rotation)
     t = rng.uniform(-0.5, 0.5, 3)
     points = (np.asarray(part, dtype=np.float64) @ R.T + t)[rng.permutation(len(part))]
@@ -77,10 +79,10 @@ def load_split(data: Path, category: str, split: str, limit: int | None = None):
 
 
 def queries(data: Path, categories, experiment: str, seed: int, limit: int | None, rotation: str = "uniform",
-            cut: str | None = None) -> list[Query]:
+            cut: str | None = None, noise: float = 0.0) -> list[Query]:
     out = []
     for category in categories:
         names, pts = load_split(data, category, "test", limit)
         for name, p in zip(names, pts):
-            out.append(make_query(name, category, p, query_rng(seed, f"{experiment}/{name}", 0), rotation, cut))
+            out.append(make_query(name, category, p, query_rng(seed, f"{experiment}/{name}", 0), rotation, cut, noise))
     return out

@@ -14,7 +14,8 @@ from pcrp_core.evaluation.models import ensure_model, loaded
 from pcrp_core.evaluation.protocol import PAPER_CATEGORIES, make_query, queries, query_rng
 from pcrp_core.parallel import parallel_map
 
-EXPERIMENTS = ("registration", "retrieval", "pose", "partial", "large", "rejection")
+EXPERIMENTS = ("registration", "retrieval", "pose", "partial", "instances", "large", "rejection")
+INSTANCE_NOISE = 0.01      # radii: a whole object's points re-measured
 OUTSIDE_CATEGORIES = ("table", "bench", "lamp")
 
 
@@ -112,6 +113,21 @@ def run_pose(s: Settings, model_path, settings) -> dict:
     return out
 
 
+def run_instances(s: Settings, model_path) -> dict:
+    """The robot's case: the gallery holds the very objects it meets (here the four categories'
+    test objects), seen whole with noise and one-sided from a random viewpoint."""
+    out = {}
+    model = loaded(model_path)
+    for name, cut, noise in (("whole", None, INSTANCE_NOISE), ("view", "view", 0.0)):
+        qs = queries(s.data, PAPER_CATEGORIES, f"instances-{name}", s.seed, s.per_category, "uniform", cut, noise)
+        methods = ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp")
+        state = {"model": str(model_path), "per_category": False, "methods": methods}
+        rows = s.map(pose_table.pose_one, qs, state, f"known objects ({name})")
+        out[name] = {"summary": pose_table.summarise(rows, methods), "rows": rows}
+    out["objects"] = len(model.gallery)
+    return out
+
+
 def run_large(s: Settings, model40) -> dict:
     qs = queries(s.data, PAPER_CATEGORIES, "pose-uniform", s.seed, s.per_category)
     state = {"model": str(model40), "per_category": False, "methods": ("pcrp",)}
@@ -163,6 +179,12 @@ def run(s: Settings) -> dict:
         settings += [("view", "uniform", "view", ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"))]
     if settings:
         timed("pose", run_pose, s, model4, settings)
+    if "instances" in s.experiments:
+        t = time.perf_counter()
+        instances = ensure_model(s.cache, "instances4", s.data, PAPER_CATEGORIES, None, s.progress, s.jobs, s.log,
+                                 split="test")
+        res["seconds"]["build_instances4"] = time.perf_counter() - t
+        timed("instances", run_instances, s, instances)
     if "large" in s.experiments:
         from pcrp_core.sources.modelnet import modelnet_categories
         t = time.perf_counter()
