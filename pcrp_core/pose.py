@@ -58,6 +58,7 @@ class PoseOptions:
     refine: bool = True
     consensus: bool = True
     consensus_weight: float = 0.5
+    exact_ratio: float = 0.8            # a candidate fitting this much better than all others is the object
     seed_all_candidates: bool = True
     pool_size: int = 6
     reverse_weight: float = 0.0
@@ -65,7 +66,7 @@ class PoseOptions:
     coarse_icp_iterations: int = 6
     vote_icp_iterations: int = 6        # ICP per hypothesis and candidate before the vote
     icp_tolerance: float = 1e-6         # stop once the trimmed mean squared error gains less
-    pca_prefilter: int = 0              # points that rank the 24 PCA axis maps first (0: all of them)
+    pca_prefilter: int = 64             # points that rank the 24 PCA axis maps first (0: all of them)
     icp_iterations: int = 20
     icp_trim: float = 0.8
     icp_points: int = 256
@@ -266,6 +267,11 @@ class Registrar:
         # the best fit decides when one candidate is the very object; the median over
         # candidates decides between near-symmetric flips that one instance happens to suit
         k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch, axis=1)))
+        # ...unless one candidate explains the query far better than every other: then it is the
+        # very object (a gallery of known objects), and relatives turned otherwise must not outvote it
+        per_candidate = np.sort(ch.min(axis=0))
+        if len(per_candidate) > 1 and per_candidate[0] < self.opts.exact_ratio * per_candidate[1]:
+            k = int(np.argmin(ch.min(axis=1)))
         best = pool[k]
         self.clock.lap("verification")
         refined = [self._final(best, g, row[k]) for g, row in zip(verifiers, votes)]

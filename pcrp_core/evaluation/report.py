@@ -216,6 +216,11 @@ def examples_plot(res: dict, s, path: Path) -> bool:
     return True
 
 
+def views_count() -> int:
+    from pcrp_core.evaluation.run import VIEWS
+    return VIEWS
+
+
 def run_noise() -> float:
     from pcrp_core.evaluation.run import INSTANCE_NOISE
     return INSTANCE_NOISE
@@ -261,11 +266,17 @@ def write_report(s, res: dict) -> Path:
                   f"of {VIEW_NOISE} radii along each ray; the sensor's position is given to PCRP (as the node does for "
                   "clouds in the camera frame). Gallery: the train split of the query's category.", "",
                   *pose_md(res["pose"]["view"]["summary"], ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"), paper=False)]
+        if "partial_views" in res:
+            lines += [f"The same queries against the same gallery built with `--views {views_count()}` (descriptors of "
+                      f"{views_count()} one-sided views of each object stored beside its own, as the README recommends "
+                      "for depth cameras):", "",
+                      *pose_md(res["partial_views"]["view"]["summary"], ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"),
+                               paper=False)]
     if "instances" in res:
         ins = res["instances"]
         lines += ["## Known objects: the robot's case", "",
                   f"The gallery holds the very objects the robot meets: the four categories' {ins['objects']} test "
-                  "objects, built into a model with the defaults. Each is queried under a uniformly random rotation, "
+                  f"objects, built into a model with the defaults and `--views {views_count()}`. Each is queried under a uniformly random rotation, "
                   f"whole with Gaussian noise of {run_noise()} radii on every point, and one-sided as a depth camera "
                   "3 radii away in a random direction sees it. Right object: the gallery object retrieved is the "
                   "query's own. The Open3D pipelines register to the object PCRP retrieved.", ""]
