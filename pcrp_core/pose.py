@@ -267,10 +267,13 @@ class Registrar:
         # the best fit decides when one candidate is the very object; the median over
         # candidates decides between near-symmetric flips that one instance happens to suit
         k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch, axis=1)))
-        # ...unless one candidate explains the query far better than every other: then it is the
-        # very object (a gallery of known objects), and relatives turned otherwise must not outvote it
+        # ...unless one candidate explains a whole object far better than every other: then it is
+        # the very object (a gallery of known objects), and relatives turned otherwise must not
+        # outvote it. Not for one-sided views: a partial cloud fits some wrong pose of one candidate
+        # closely often enough that only the consensus tells the flips apart.
         per_candidate = np.sort(ch.min(axis=0))
-        if len(per_candidate) > 1 and per_candidate[0] < self.opts.exact_ratio * per_candidate[1]:
+        if (self.viewpoint is None and len(per_candidate) > 1
+                and per_candidate[0] < self.opts.exact_ratio * per_candidate[1]):
             k = int(np.argmin(ch.min(axis=1)))
         best = pool[k]
         self.clock.lap("verification")
