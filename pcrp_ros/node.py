@@ -8,6 +8,8 @@ unusable one is refused and counted under its reason however busy the worker is.
 """
 from __future__ import annotations
 
+import faulthandler
+import signal
 import sys
 import threading
 import time
@@ -201,6 +203,11 @@ class PcrpNode(Node):
 
 
 def main(args=None) -> int:
+    # a crash inside DDS or Open3D prints the Python stack of every thread, and `kill -USR1 <pid>`
+    # prints them on demand (what a stuck node is doing), instead of dying or hanging silently
+    faulthandler.enable(all_threads=True)
+    if hasattr(signal, "SIGUSR1"):
+        faulthandler.register(signal.SIGUSR1, all_threads=True)
     rclpy.init(args=args)
     # The executor exists before the node says it is listening: a Ctrl-C that lands while an
     # executor is being built leaves a half-made object whose __del__ prints a traceback.
