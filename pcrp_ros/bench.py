@@ -140,15 +140,12 @@ def query_set(data: Path, n: int, n_points: int, seed: int):
     return out
 
 
-def _geodesic(R_est, R_true) -> float:
-    return float(np.degrees(np.arccos(np.clip((np.trace(np.asarray(R_est).T @ R_true) - 1) / 2, -1, 1))))
-
-
 def bench_queries(model_path: str, data: Path, n: int, n_points: int, seed: int, baselines: bool = True,
                   progress=None) -> dict:
     """Per-stage time of `estimate`, and the Open3D pipelines on the same queries (registering to
     the gallery object PCRP retrieved, its FPFH computed once beforehand as an Open3D user would)."""
     from pcrp_core import PCRP
+    from pcrp_core.evaluation.metrics import geodesic_deg
     model = PCRP.load(model_path)
     queries = query_set(data, n, n_points, seed)
     wrap = progress or (lambda it, **_: it)
@@ -164,7 +161,7 @@ def bench_queries(model_path: str, data: Path, n: int, n_points: int, seed: int,
         t0 = time.perf_counter()
         r = model.estimate(pts)
         rows["pcrp"]["seconds"].append(time.perf_counter() - t0)
-        rows["pcrp"]["errors"].append(_geodesic(r.rotation, R))
+        rows["pcrp"]["errors"].append(geodesic_deg(r.rotation, R))
         stages.append(r.timings)
         cats.append(r.category == cat)
         if baselines:
@@ -175,7 +172,7 @@ def bench_queries(model_path: str, data: Path, n: int, n_points: int, seed: int,
                 T = fn(pts, targets[r.gallery_id])
                 o3d_runs[name]["seconds"].append(time.perf_counter() - t0)
                 # the baselines register query onto gallery: p_gallery = R' p_query + t' => R = R'^T
-                o3d_runs[name]["errors"].append(_geodesic(T[:3, :3].T, R))
+                o3d_runs[name]["errors"].append(geodesic_deg(T[:3, :3].T, R))
         errors.append(rows["pcrp"]["errors"][-1])
     rows.update(o3d_runs)
     keys = [k for k in STAGES if any(k in s for s in stages)] + sorted({k for s in stages for k in s} - set(STAGES))

@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from pcrp_core.evaluation import pose_table, registration_table, retrieval_table
+from pcrp_core.evaluation.metrics import geodesic_deg
 from pcrp_core.evaluation.protocol import PAPER_CATEGORIES, PLANE_KEEP, VIEW_NOISE
 
 # The paper's figures (Kadam, Zhou, Liu, Kuo), as the issue quotes them.
@@ -215,7 +216,7 @@ def examples_plot(res: dict, s, path: Path) -> bool:
         ax = fig.add_subplot(1, 4, k + 1, projection="3d")
         ax.scatter(*q.points.T, s=1, c="tab:blue", label="query")
         ax.scatter(*aligned.T, s=1, c="tab:orange", label=f"{r.gallery_id}, aligned")
-        err = np.degrees(np.arccos(np.clip((np.trace(r.rotation.T @ q.R) - 1) / 2, -1, 1)))
+        err = geodesic_deg(r.rotation, q.R)
         ax.set_title(f"{q.name}: error {err:.1f}°, score {r.score:.2f}", fontsize=9)
         ax.set_axis_off()
         ax.legend(fontsize=7, loc="upper left")
