@@ -16,6 +16,8 @@ METHODS = {
     "fgr_icp": "Open3D FPFH + FGR + ICP",
     "ransac_icp": "Open3D FPFH + RANSAC + ICP",
 }
+# what can answer a one-sided view (ICP alone from the centroids cannot: a view's centroid is off)
+VIEW_METHODS = ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp")
 BASELINES = {"icp": o3d_pipes.icp_only, "fgr_icp": o3d_pipes.fgr_icp, "ransac_icp": o3d_pipes.ransac_icp}
 RIGHT_DEG = 30.0   # an answer is "right" for the rejection table when under this and of the right category
 

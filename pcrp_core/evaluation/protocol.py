@@ -19,6 +19,8 @@ PAPER_CATEGORIES = ("airplane", "chair", "sofa", "car")
 ROTATIONS = ("uniform", "euler45")
 PLANE_KEEP = 0.75          # 768 of 1024 points, as PRNet's partial protocol that R-PointHop follows
 VIEW_NOISE = 0.005         # range noise along each ray, in object radii
+INSTANCE_NOISE = 0.01      # radii: a whole known object's points re-measured
+VIEWS = 12                 # one-sided views per object in the depth-camera models, as the README recommends
 
 
 @dataclass

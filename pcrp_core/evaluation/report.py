@@ -7,7 +7,7 @@ import numpy as np
 
 from pcrp_core.evaluation import pose_table, registration_table, retrieval_table
 from pcrp_core.evaluation.metrics import geodesic_deg
-from pcrp_core.evaluation.protocol import PAPER_CATEGORIES, PLANE_KEEP, VIEW_NOISE
+from pcrp_core.evaluation.protocol import INSTANCE_NOISE, PAPER_CATEGORIES, PLANE_KEEP, VIEW_NOISE, VIEWS
 
 # The paper's figures (Kadam, Zhou, Liu, Kuo), as the issue quotes them.
 PAPER_REGISTRATION = {"rotation": {"mse": 2.68, "rmse": 1.64, "mae": 0.33},
@@ -226,16 +226,6 @@ def examples_plot(res: dict, s, path: Path) -> bool:
     return True
 
 
-def views_count() -> int:
-    from pcrp_core.evaluation.run import VIEWS
-    return VIEWS
-
-
-def run_noise() -> float:
-    from pcrp_core.evaluation.run import INSTANCE_NOISE
-    return INSTANCE_NOISE
-
-
 def write_report(s, res: dict) -> Path:
     out = Path(s.out)
     per = res["per_category"] or "all"
@@ -275,23 +265,22 @@ def write_report(s, res: dict) -> Path:
                   "Each query cut to the points a sensor 3 radii away in a random direction sees, with range noise "
                   f"of {VIEW_NOISE} radii along each ray; the sensor's position is given to PCRP (as the node does for "
                   "clouds in the camera frame). Gallery: the train split of the query's category.", "",
-                  *pose_md(res["pose"]["view"]["summary"], ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"), paper=False)]
+                  *pose_md(res["pose"]["view"]["summary"], pose_table.VIEW_METHODS, paper=False)]
         if "partial_views" in res:
-            lines += [f"The same queries against the same gallery built with `--views {views_count()}` (descriptors of "
-                      f"{views_count()} one-sided views of each object stored beside its own, as the README recommends "
+            lines += [f"The same queries against the same gallery built with `--views {VIEWS}` (descriptors of "
+                      f"{VIEWS} one-sided views of each object stored beside its own, as the README recommends "
                       "for depth cameras):", "",
-                      *pose_md(res["partial_views"]["view"]["summary"], ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"),
+                      *pose_md(res["partial_views"]["view"]["summary"], pose_table.VIEW_METHODS,
                                paper=False)]
     if "instances" in res:
         ins = res["instances"]
         lines += ["## Known objects: the robot's case", "",
                   f"The gallery holds the very objects the robot meets: the four categories' {ins['objects']} test "
-                  f"objects, built into a model with the defaults and `--views {views_count()}`. Each is queried under a uniformly random rotation, "
-                  f"whole with Gaussian noise of {run_noise()} radii on every point, and one-sided as a depth camera "
+                  f"objects, built into a model with the defaults and `--views {VIEWS}`. Each is queried under a uniformly random rotation, "
+                  f"whole with Gaussian noise of {INSTANCE_NOISE} radii on every point, and one-sided as a depth camera "
                   "3 radii away in a random direction sees it. Right object: the gallery object retrieved is the "
                   "query's own. The Open3D pipelines register to the object PCRP retrieved.", ""]
-        for name, title, methods in (("whole", "Whole objects, noisy", ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp")),
-                                     ("view", "One-sided views", ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"))):
+        for name, title in (("whole", "Whole objects, noisy"), ("view", "One-sided views")):
             if name in ins:
                 acc = ", ".join(f"{c} {_pct(ins[name]['summary'][c]['object_accuracy'])}"
                                 for c in list(PAPER_CATEGORIES) + ["all"] if c in ins[name]["summary"])
@@ -301,7 +290,7 @@ def write_report(s, res: dict) -> Path:
                 lines += [f"**{title}** (right object: {acc}). At the default `min_score` the fit score rejects "
                           f"{_pct(rej.mean())} of these clouds: {_pct((rej & right).mean())} of all were right, "
                           f"{_pct((rej & ~right).mean())} wrong; {_pct((~rej & ~right).mean())} are wrong but accepted.",
-                          "", *pose_md(ins[name]["summary"], methods, paper=False)]
+                          "", *pose_md(ins[name]["summary"], pose_table.VIEW_METHODS, paper=False)]
     if "registration" in res:
         lines += ["## Registration (the paper's Table 1)", "",
                   "Each test object registered to a copy of itself under a random rotation (each Euler angle uniform "

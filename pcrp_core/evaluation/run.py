@@ -11,12 +11,10 @@ import numpy as np
 
 from pcrp_core.evaluation import pose_table, registration_table, retrieval_table
 from pcrp_core.evaluation.models import ensure_model, loaded
-from pcrp_core.evaluation.protocol import PAPER_CATEGORIES, make_query, queries, query_rng
+from pcrp_core.evaluation.protocol import INSTANCE_NOISE, PAPER_CATEGORIES, VIEWS, queries, query_rng
 from pcrp_core.parallel import parallel_map
 
 EXPERIMENTS = ("registration", "retrieval", "pose", "partial", "instances", "large", "rejection")
-INSTANCE_NOISE = 0.01      # radii: a whole object's points re-measured
-VIEWS = 12                 # one-sided views per object in the depth-camera models, as the README recommends
 OUTSIDE_CATEGORIES = ("table", "bench", "lamp")
 
 
@@ -121,10 +119,9 @@ def run_instances(s: Settings, model_path) -> dict:
     model = loaded(model_path)
     for name, cut, noise in (("whole", None, INSTANCE_NOISE), ("view", "view", 0.0)):
         qs = queries(s.data, PAPER_CATEGORIES, f"instances-{name}", s.seed, s.per_category, "uniform", cut, noise)
-        methods = ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp")
-        state = {"model": str(model_path), "per_category": False, "methods": methods}
+        state = {"model": str(model_path), "per_category": False, "methods": pose_table.VIEW_METHODS}
         rows = s.map(pose_table.pose_one, qs, state, f"known objects ({name})")
-        out[name] = {"summary": pose_table.summarise(rows, methods), "rows": rows}
+        out[name] = {"summary": pose_table.summarise(rows, pose_table.VIEW_METHODS), "rows": rows}
     out["objects"] = len(model.gallery)
     return out
 
@@ -164,9 +161,13 @@ def run(s: Settings) -> dict:
         res[name] = fn(*a)
         res["seconds"][name] = time.perf_counter() - t
 
-    t = time.perf_counter()
-    model4 = ensure_model(s.cache, "model4" + suffix, s.data, PAPER_CATEGORIES, s.build_limit, s.progress, s.jobs, s.log)
-    res["seconds"]["build_model4"] = time.perf_counter() - t
+    def built(name, categories, limit, **kw):
+        t = time.perf_counter()
+        path = ensure_model(s.cache, name, s.data, categories, limit, s.progress, s.jobs, s.log, **kw)
+        res["seconds"][f"build_{name.removesuffix(suffix)}"] = time.perf_counter() - t
+        return path
+
+    model4 = built("model4" + suffix, PAPER_CATEGORIES, s.build_limit)
     res["model4"] = {"objects": len(loaded(model4).gallery), "path": str(model4)}
     if "registration" in s.experiments:
         timed("registration", run_registration, s, model4)
@@ -177,29 +178,20 @@ def run(s: Settings) -> dict:
         settings += [("uniform", "uniform", None, tuple(pose_table.METHODS)),
                      ("euler45", "euler45", None, tuple(pose_table.METHODS))]
     if "partial" in s.experiments:
-        settings += [("view", "uniform", "view", ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"))]
+        settings += [("view", "uniform", "view", pose_table.VIEW_METHODS)]
     if settings:
         timed("pose", run_pose, s, model4, settings)
     if "partial" in s.experiments:
         # what a robot user builds for a depth camera: the same gallery with one-sided views described
-        t = time.perf_counter()
-        views4 = ensure_model(s.cache, "model4_views" + suffix, s.data, PAPER_CATEGORIES, s.build_limit, s.progress,
-                              s.jobs, s.log, views=VIEWS)
-        res["seconds"]["build_model4_views"] = time.perf_counter() - t
+        views4 = built("model4_views" + suffix, PAPER_CATEGORIES, s.build_limit, views=VIEWS)
         timed("partial_views", run_pose, s, views4,
-              [("view", "uniform", "view", ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp"))])
+              [("view", "uniform", "view", pose_table.VIEW_METHODS)])
     if "instances" in s.experiments:
-        t = time.perf_counter()
-        instances = ensure_model(s.cache, "instances4", s.data, PAPER_CATEGORIES, None, s.progress, s.jobs, s.log,
-                                 split="test", views=VIEWS)
-        res["seconds"]["build_instances4"] = time.perf_counter() - t
+        instances = built("instances4", PAPER_CATEGORIES, None, split="test", views=VIEWS)
         timed("instances", run_instances, s, instances)
     if "large" in s.experiments:
         from pcrp_core.sources.modelnet import modelnet_categories
-        t = time.perf_counter()
-        model40 = ensure_model(s.cache, "model40" + suffix, s.data, modelnet_categories(s.data), s.large_limit,
-                               s.progress, s.jobs, s.log)
-        res["seconds"]["build_model40"] = time.perf_counter() - t
+        model40 = built("model40" + suffix, modelnet_categories(s.data), s.large_limit)
         timed("large", run_large, s, model40)
     if "rejection" in s.experiments:
         timed("rejection", run_rejection, s, model4)
