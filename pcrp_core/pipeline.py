@@ -68,7 +68,7 @@ class PCRP:
         self.meta = dict(meta or {})
         self.n_points = int(n_points)
         self.pose_options = PoseOptions()
-        self.n_candidates = 8
+        self.n_candidates = 16
         self.n_matched = 2
         self.min_score = 0.5
         self.min_points = 32
@@ -315,7 +315,7 @@ class PCRP:
         top = [int(i) for i in idx[: self.n_candidates]]
         matched = [self._prepared(i, features=True) for i in top[: self.n_matched]]
         verifiers = matched + [self._prepared(i, features=False) for i in top[self.n_matched:]]
-        j, h = registrar.best_pose(matched, verifiers)
+        j, h = registrar.best_pose(matched, verifiers, [self.gallery.categories[i] for i in top])
         i = top[j]
         timings["registration"] = time.perf_counter() - t3
         # g_n = R' (k q_n) + t'  with q_n = (q - centre)/unit, g_n = (g - c_g)/unit, k = size * ratio

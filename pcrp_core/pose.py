@@ -61,12 +61,17 @@ class PoseOptions:
     exact_ratio: float = 0.8            # a candidate fitting this much better than all others is the object
     seed_all_candidates: bool = True
     pool_size: int = 6
-    reverse_weight: float = 0.0
+    # whole clouds only (no viewpoint): the gallery object's points far from the posed query count
+    # against the pose, untrimmed, since what is missing is the evidence: a chair turned back to
+    # front puts its legs where the back should be, and a trimmed mean drops exactly those points
+    reverse_weight: float = 0.5
+    reverse_trim: float = 1.0
     visibility_weight: float = 1.0
     coarse_icp_iterations: int = 6
     vote_icp_iterations: int = 6        # ICP per hypothesis and candidate before the vote
     icp_tolerance: float = 1e-6         # stop once the trimmed mean squared error gains less
     pca_prefilter: int = 64             # points that rank the 24 PCA axis maps first (0: all of them)
+    average_within: float = 1.3        # candidates fitting within this factor of the best are averaged
     icp_iterations: int = 20
     icp_trim: float = 0.8
     icp_points: int = 256
@@ -197,7 +202,7 @@ class Registrar:
             elif self.opts.reverse_weight > 0:
                 # the gallery object's points near the query too: absent parts count against a pose
                 back = cKDTree(moved[n]).query(gallery.points[:: max(1, len(gallery.points) // len(src))])[0]
-                k = max(1, int(0.8 * len(back)))
+                k = max(1, int(self.opts.reverse_trim * len(back)))
                 c = c + self.opts.reverse_weight * float(np.mean(np.partition(back, k - 1)[:k]))
             hyps.append(Hypothesis(R, t, float(fit[n]), float(rmse[n]), c, source, float(prev[n]), bool(moving[n])))
         return hyps
@@ -242,11 +247,13 @@ class Registrar:
                                     [hyp.source], coarse=False, prev=[vote.icp_prev])[0]
         return self.refine(hyp.R, hyp.t, gallery, opts.icp_iterations, hyp.source, coarse=False)
 
-    def best_pose(self, matched: list[Prepared], verifiers: list[Prepared]) -> tuple[int, Hypothesis]:
+    def best_pose(self, matched: list[Prepared], verifiers: list[Prepared], groups=None) -> tuple[int, Hypothesis]:
         """(index into verifiers of the best-fitting object, its refined hypothesis).
 
         matched: the first retrieved objects, with features, that seed hypotheses;
-        verifiers: all top retrieved objects (matched first) that vote on them.
+        verifiers: all top retrieved objects (matched first) that vote on them;
+        groups: each verifier's category, when known: only those of the best-fitting object's
+        category vote (a chair has no say on which way an airplane faces).
         """
         self.clock.lap("gallery_features")   # what the caller spent preparing the candidates
         pool = []
@@ -264,9 +271,12 @@ class Registrar:
         Rs, ts = [h.R for h in pool], [h.t for h in pool]
         votes = [self.refine_many(Rs, ts, g, self.opts.vote_icp_iterations, [""] * len(pool)) for g in verifiers]
         ch = np.array([[h.chamfer for h in row] for row in votes]).T
+        voters = np.ones(len(verifiers), bool)
+        if groups is not None:
+            voters = np.asarray(groups) == groups[int(np.argmin(ch.min(axis=0)))]
         # the best fit decides when one candidate is the very object; the median over
         # candidates decides between near-symmetric flips that one instance happens to suit
-        k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch, axis=1)))
+        k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch[:, voters], axis=1)))
         # ...unless one candidate explains a whole object far better than every other: then it is
         # the very object (a gallery of known objects), and relatives turned otherwise must not
         # outvote it. Not for one-sided views: a partial cloud fits some wrong pose of one candidate
@@ -279,7 +289,7 @@ class Registrar:
         self.clock.lap("verification")
         refined = [self._final(best, g, row[k]) for g, row in zip(verifiers, votes)]
         j = int(np.argmin([h.chamfer for h in refined]))
-        avg = _average(refined, refined[j])
+        avg = _average(refined, refined[j], self.opts.average_within)
         final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
         self.clock.lap("refinement")
         return j, final
@@ -289,20 +299,19 @@ def _resumed(vote: Hypothesis, source: str) -> Hypothesis:
     return Hypothesis(vote.R, vote.t, vote.fitness, vote.rmse, vote.chamfer, source, vote.icp_prev, vote.icp_moving)
 
 
-def _average(hyps: list[Hypothesis], anchor: Hypothesis) -> Hypothesis:
-    """Pose averaged over the candidates that agree with the best one, weighted by fit.
+def _average(hyps: list[Hypothesis], anchor: Hypothesis, within: float) -> Hypothesis:
+    """Pose averaged over the candidates that agree with the best one and fit nearly as well.
 
-    Each pre-aligned candidate gives its own estimate of the query's canonical pose, off by
-    how that instance differs from the query; averaging cancels much of that, and the 1/chamfer^2
-    weights let an exact gallery match dominate.
+    Each pre-aligned candidate gives its own estimate of the query's canonical pose, off by how
+    that instance differs from the query; averaging cancels much of that. Equal weights: fit
+    differences between instances that all sit well say little about whose frame is truer, and
+    an exact gallery match stands alone anyway, since no relative fits within a factor of it.
     """
     cos_max = np.cos(np.radians(15.0))
-    agree = [h for h in hyps if (np.trace(h.R @ anchor.R.T) - 1) / 2 > cos_max and h.chamfer < 2.0 * anchor.chamfer]
-    w = np.array([1.0 / max(h.chamfer, 1e-4) ** 2 for h in agree])
-    M = sum(wi * h.R for wi, h in zip(w, agree))
-    U, _, Vt = np.linalg.svd(M)
+    agree = [h for h in hyps if (np.trace(h.R @ anchor.R.T) - 1) / 2 > cos_max and h.chamfer <= within * anchor.chamfer]
+    U, _, Vt = np.linalg.svd(sum(h.R for h in agree))
     R = U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))]) @ Vt
-    t = sum(wi * h.t for wi, h in zip(w, agree)) / w.sum()
+    t = np.mean([h.t for h in agree], axis=0)
     return Hypothesis(R, t, anchor.fitness, anchor.rmse, anchor.chamfer, anchor.source + f"+avg{len(agree)}")
 
 

@@ -66,6 +66,22 @@ def test_a_gallery_subset_answers_from_its_own_objects_only(small_model):
         model.subset([])
 
 
+def test_the_frame_audit_finds_the_axis_turn_between_two_copies_of_an_object():
+    from pcrp_core.evaluation import frames
+    from scipy.spatial import cKDTree
+    rng = np.random.default_rng(0)
+    box = rng.uniform(-1, 1, (frames.POINTS, 3)) * [1.0, 0.4, 0.2]        # three distinct extents
+    turned = [np.allclose(M, Rotation.from_euler("z", 90, degrees=True).as_matrix(), atol=1e-9)
+              for M in frames.AXIS_ROTATIONS].index(True)
+    gallery = np.stack([box, box @ frames.AXIS_ROTATIONS[turned].T])
+    cost = frames.chamfer_by_rotation(box, gallery, [cKDTree(c) for c in gallery])
+    assert cost.argmin(1).tolist() == [frames.IDENTITY, turned]
+    rows = [{"name": "a", "category": "car", "nearest_agrees": True, "share_agreeing": 0.5, "nearest_turn_deg": 0.0},
+            {"name": "b", "category": "car", "nearest_agrees": False, "share_agreeing": 0.1, "nearest_turn_deg": 90.0}]
+    d = frames.summarise(rows)["car"]
+    assert d["nearest_agrees"] == 0.5 and d["quarter_turns"] == 0.5 and d["half_turns"] == 0.0
+
+
 @pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")
 def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
     out = tmp_path / "results"
@@ -74,7 +90,7 @@ def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
                           capture_output=True, text=True, timeout=900, env={**__import__("os").environ, "TQDM_DISABLE": "1"})
     assert proc.returncode == 0, proc.stderr[-3000:]
     text = (out / "RESULTS.md").read_text()
-    for heading in ("## The bar", "## Pose estimation", "### The narrower protocol", "## Partial views",
+    for heading in ("## The bar", "## What the data allows", "## Pose estimation", "### The narrower protocol", "## Partial views",
                     "## Registration", "## Retrieval", "## A larger gallery", "## Rejection"):
         assert heading in text
     assert (out / "pose_cdf.png").stat().st_size > 10_000 and (out / "pose_examples.png").stat().st_size > 10_000

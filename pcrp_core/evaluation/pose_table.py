@@ -10,7 +10,7 @@ from pcrp_core.evaluation.metrics import geodesic_deg, rotation_summary
 from pcrp_core.evaluation.models import category_model, loaded
 
 METHODS = {
-    "pcrp": "PCRP, this package's defaults (8 candidates verified, half turns, ICP)",
+    "pcrp": "PCRP, this package's defaults (16 candidates verified, half turns, ICP)",
     "pcrp_paper": "PCRP as the paper describes it (top-1 object, RANSAC on symmetry-split matches)",
     "icp": "ICP alone, from the centroids' offset",
     "fgr_icp": "Open3D FPFH + FGR + ICP",

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from pcrp_core.evaluation import pose_table, registration_table, retrieval_table
+from pcrp_core.evaluation import frames, pose_table, registration_table, retrieval_table
 from pcrp_core.evaluation.models import ensure_model, loaded
 from pcrp_core.evaluation.protocol import INSTANCE_NOISE, PAPER_CATEGORIES, VIEWS, queries, query_rng
 from pcrp_core.parallel import parallel_map
 
-EXPERIMENTS = ("registration", "retrieval", "pose", "partial", "instances", "large", "rejection")
+EXPERIMENTS = ("frames", "registration", "retrieval", "pose", "partial", "instances", "large", "rejection")
 OUTSIDE_CATEGORIES = ("table", "bench", "lamp")
 
 
@@ -46,6 +46,17 @@ def _machine() -> dict:
         except md.PackageNotFoundError:
             pass
     return {"cores": len(os.sched_getaffinity(0)), "cpu": cpu, "python": platform.python_version(), **versions}
+
+
+def run_frames(s: Settings) -> dict:
+    """How consistently each category's objects share one frame (see frames.py): no model needed."""
+    from pcrp_core.evaluation.protocol import load_split
+    items = []
+    for category in PAPER_CATEGORIES:
+        names, pts = load_split(s.data, category, "test", s.per_category)
+        items += [(n, category, p) for n, p in zip(names, pts)]
+    rows = s.map(frames.audit_one, items, {"data": str(s.data)}, "frames of the data")
+    return {"summary": frames.summarise(rows), "rows": rows}
 
 
 def run_registration(s: Settings, model_path) -> dict:
@@ -169,6 +180,8 @@ def run(s: Settings) -> dict:
 
     model4 = built("model4" + suffix, PAPER_CATEGORIES, s.build_limit)
     res["model4"] = {"objects": len(loaded(model4).gallery), "path": str(model4)}
+    if "frames" in s.experiments:
+        timed("frames", run_frames, s)
     if "registration" in s.experiments:
         timed("registration", run_registration, s, model4)
     if "retrieval" in s.experiments:

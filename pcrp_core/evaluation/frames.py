@@ -1,0 +1,74 @@
+"""How consistently a category's objects share one canonical frame: the bound the data itself sets
+on pose error.
+
+A gallery-based method answers in the gallery's frame. When the objects of one category disagree
+about which way is front (in this copy of ModelNet40 some cars and airplanes face along x, others
+along y), a test object whose frame differs from its look-alikes' cannot come back right, whatever
+the registration. For each test object this finds, among the train objects of its category, the one
+whose shape is nearest under the best of the 24 rotations that map axes onto axes, and records
+whether that best rotation is the identity: an upper bound, measured without any of the package's
+own machinery, on how many queries a method that retrieves the nearest look-alike and registers it
+perfectly can get right.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from pcrp_core.pose import AXIS_ROTATIONS
+
+POINTS = 128                    # per cloud: enough to tell a quarter or half turn of an object apart
+IDENTITY = int(np.flatnonzero([np.allclose(M, np.eye(3)) for M in AXIS_ROTATIONS])[0])
+_GALLERIES: dict = {}
+
+
+def _subsample(points: np.ndarray, seed: int) -> np.ndarray:
+    idx = np.random.default_rng(seed).choice(len(points), POINTS, replace=False)
+    return points[idx] - points.mean(0)
+
+
+def _gallery(data, category: str):
+    """(train clouds subsampled, their trees), once per process and category."""
+    if category not in _GALLERIES:
+        from pcrp_core.evaluation.protocol import load_split
+        _, pts = load_split(data, category, "train")
+        clouds = [_subsample(p, i) for i, p in enumerate(pts)]
+        _GALLERIES[category] = (np.stack(clouds), [cKDTree(c) for c in clouds])
+    return _GALLERIES[category]
+
+
+def chamfer_by_rotation(query: np.ndarray, clouds: np.ndarray, trees) -> np.ndarray:
+    """(G, 24) symmetric chamfer distance between the query turned by each axis map and each cloud."""
+    rotated = np.einsum("rij,nj->rni", AXIS_ROTATIONS, query)                   # (24, n, 3)
+    g, n = clouds.shape[:2]
+    flat = clouds.reshape(-1, 3)
+    back = np.stack([cKDTree(r).query(flat)[0].reshape(g, n).mean(1) for r in rotated], axis=1)
+    forth = np.stack([t.query(rotated.reshape(-1, 3))[0].reshape(len(rotated), -1).mean(1) for t in trees])
+    return back + forth
+
+
+def audit_one(state: dict, item) -> dict:
+    """item: (name, category, points) of one test object."""
+    name, category, points = item
+    clouds, trees = _gallery(state["data"], category)
+    cost = chamfer_by_rotation(_subsample(points, 0), clouds, trees)
+    best = cost.argmin(1)
+    nearest = np.argsort(cost.min(1))
+    return {"name": name, "category": category,
+            "nearest_agrees": bool(best[nearest[0]] == IDENTITY),
+            "share_agreeing": float(np.mean(best == IDENTITY)),
+            "nearest_turn_deg": float(np.degrees(np.arccos(np.clip((np.trace(AXIS_ROTATIONS[best[nearest[0]]]) - 1) / 2,
+                                                                     -1, 1))))}
+
+
+def summarise(rows: list[dict]) -> dict:
+    out = {}
+    for cat in sorted({r["category"] for r in rows}):
+        sel = [r for r in rows if r["category"] == cat]
+        turns = np.array([r["nearest_turn_deg"] for r in sel])
+        out[cat] = {"objects": len(sel),
+                    "nearest_agrees": float(np.mean([r["nearest_agrees"] for r in sel])),
+                    "share_agreeing_median": float(np.median([r["share_agreeing"] for r in sel])),
+                    "quarter_turns": float(np.mean(np.isclose(turns, 90.0, atol=1))),
+                    "half_turns": float(np.mean(np.isclose(turns, 180.0, atol=1)))}
+    return out
