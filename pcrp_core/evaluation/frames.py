@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from pcrp_core.evaluation.metrics import geodesic_deg
 from pcrp_core.pose import AXIS_ROTATIONS
 
 POINTS = 128                    # per cloud: enough to tell a quarter or half turn of an object apart
@@ -57,8 +58,7 @@ def audit_one(state: dict, item) -> dict:
     return {"name": name, "category": category,
             "nearest_agrees": bool(best[nearest[0]] == IDENTITY),
             "share_agreeing": float(np.mean(best == IDENTITY)),
-            "nearest_turn_deg": float(np.degrees(np.arccos(np.clip((np.trace(AXIS_ROTATIONS[best[nearest[0]]]) - 1) / 2,
-                                                                     -1, 1))))}
+            "nearest_turn_deg": geodesic_deg(AXIS_ROTATIONS[best[nearest[0]]], np.eye(3))}
 
 
 def summarise(rows: list[dict]) -> dict:

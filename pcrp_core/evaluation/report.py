@@ -46,7 +46,7 @@ NOTES = """\
   case) a right answer fits almost perfectly and a wrong one does not, so most rejected clouds are
   ones that would have been wrong. When the gallery holds only relatives (the category-level tables),
   a right pose on a different instance fits less well, and the threshold refuses right answers about
-  as readily as wrong ones; it still refuses about two thirds of objects from other categories.
+  as readily as wrong ones; it still refuses many objects from other categories (the rejection table).
   `min_score` moves the trade either way."""
 
 
