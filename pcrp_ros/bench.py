@@ -342,9 +342,9 @@ def why_unmet(res: dict) -> list[str]:
     out = []
     v = res.get("verdicts", {})
     single = [q for q in res.get("queries", []) if q["threads"] == "1" and q["n_points"] == 1024]
+    st = single[0]["stages"] if single else {}
+    reg, tot = st.get("registration", {}).get("median_ms", 0), st.get("total", {}).get("median_ms", 0)
     if single and not v.get(TARGETS[0][0], (None, True))[1]:
-        st = single[0]["stages"]
-        reg, tot = st.get("registration", {}).get("median_ms", 0), st.get("total", {}).get("median_ms", 0)
         out.append(f"**Why a query takes longer than 100 ms.** {reg:.0f} of its {tot:.0f} ms are registration: "
                    "hypotheses from each of the retrieved candidates (RANSAC on feature matches, principal axes, half "
                    "turns, each with a short ICP) and the vote that scores every hypothesis on every candidate. That "
@@ -355,7 +355,6 @@ def why_unmet(res: dict) -> list[str]:
                    "fewer hypotheses or coarser ICP saved at most 20 % and cost accuracy too. So the defaults stay, "
                    "and a user who needs latency more than accuracy lowers the node's `n_candidates`.")
     if res.get("node") and not v.get(TARGETS[2][0], (None, True))[1]:
-        tot = single[0]["stages"].get("total", {}).get("median_ms", 0) if single else 0
         out.append("**Why the node's answers are older than 250 ms.** One worker answers the newest cloud of each "
                    "topic: a cloud that arrives while another is being answered waits for it, so its age at "
                    "publication is its own processing time plus up to one more. With a query near "

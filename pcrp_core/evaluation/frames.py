@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from pcrp_core.evaluation.metrics import geodesic_deg
+from pcrp_core.evaluation.protocol import load_split
 from pcrp_core.pose import AXIS_ROTATIONS
 
 POINTS = 128                    # per cloud: enough to tell a quarter or half turn of an object apart
@@ -31,7 +32,6 @@ def _subsample(points: np.ndarray, seed: int) -> np.ndarray:
 def _gallery(data, category: str):
     """(train clouds subsampled, their trees), once per process and category."""
     if category not in _GALLERIES:
-        from pcrp_core.evaluation.protocol import load_split
         _, pts = load_split(data, category, "train")
         clouds = [_subsample(p, i) for i, p in enumerate(pts)]
         _GALLERIES[category] = (np.stack(clouds), [cKDTree(c) for c in clouds])

@@ -11,7 +11,7 @@ import numpy as np
 
 from pcrp_core.evaluation import frames, pose_table, registration_table, retrieval_table
 from pcrp_core.evaluation.models import ensure_model, loaded
-from pcrp_core.evaluation.protocol import INSTANCE_NOISE, PAPER_CATEGORIES, VIEWS, queries, query_rng
+from pcrp_core.evaluation.protocol import INSTANCE_NOISE, PAPER_CATEGORIES, VIEWS, load_split, queries, query_rng
 from pcrp_core.parallel import parallel_map
 
 EXPERIMENTS = ("frames", "registration", "retrieval", "pose", "partial", "instances", "large", "rejection")
@@ -50,7 +50,6 @@ def _machine() -> dict:
 
 def run_frames(s: Settings) -> dict:
     """How consistently each category's objects share one frame (see frames.py): no model needed."""
-    from pcrp_core.evaluation.protocol import load_split
     items = []
     for category in PAPER_CATEGORIES:
         names, pts = load_split(s.data, category, "test", s.per_category)
