@@ -9,8 +9,11 @@ Verification goes past the paper: every surviving hypothesis is refined by ICP a
 of the top retrieved objects, and the rotation that sits best on all of them together wins.
 Because the gallery is pre-aligned, all candidates share one canonical frame, so a right
 rotation fits every candidate of the category, while a flip that happens to suit one
-instance is outvoted by the others. All of it happens in normalised coordinates, query
-registered onto gallery: g ≈ R @ q + t.
+instance is outvoted by the others. The final pose averages the candidates that agree and
+fit nearly as well as the best, each refined once more (for whole clouds) with matches taken
+both ways, so that it sits centred on the candidate rather than wherever the query's points
+happen to touch its surface. All of it happens in normalised coordinates, query registered
+onto gallery: g ≈ R @ q + t.
 """
 from __future__ import annotations
 
@@ -19,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from pcrp_core.registration import fit_quality_batch, icp_batch, ransac
+from pcrp_core.registration import fit_quality_batch, icp_batch, icp_symmetric, ransac
 from pcrp_core.registration.icp import transform_batch
 from pcrp_core.registration.correspondences import matches_within_halves
 from pcrp_core.symmetry import principal_axes, split_halves
@@ -59,7 +62,7 @@ class PoseOptions:
     consensus: bool = True
     consensus_weight: float = 0.5
     exact_ratio: float = 0.8            # a candidate fitting this much better than all others is the object
-    seed_all_candidates: bool = True
+    seeders: int = 0                    # top candidates that seed hypotheses (0: all; at least those matched)
     pool_size: int = 6
     # whole clouds only (no viewpoint): the gallery object's points far from the posed query count
     # against the pose, untrimmed, since what is missing is the evidence: a chair turned back to
@@ -71,7 +74,10 @@ class PoseOptions:
     vote_icp_iterations: int = 6        # ICP per hypothesis and candidate before the vote
     icp_tolerance: float = 1e-6         # stop once the trimmed mean squared error gains less
     pca_prefilter: int = 64             # points that rank the 24 PCA axis maps first (0: all of them)
-    average_within: float = 1.3        # candidates fitting within this factor of the best are averaged
+    average_within: float = 1.15       # candidates fitting within this factor of the best are averaged
+    # whole clouds only: the averaged candidates are refined once more with matches taken both ways
+    symmetric_iterations: int = 20
+    symmetric_reverse_trim: float = 0.9   # the gallery side trimmed less: what it has and the query lacks is the evidence
     icp_iterations: int = 20
     icp_trim: float = 0.8
     icp_points: int = 256
@@ -247,6 +253,14 @@ class Registrar:
                                     [hyp.source], coarse=False, prev=[vote.icp_prev])[0]
         return self.refine(hyp.R, hyp.t, gallery, opts.icp_iterations, hyp.source, coarse=False)
 
+    def _symmetric(self, hyp: Hypothesis, gallery: Prepared) -> Hypothesis:
+        """hyp refined further by icp_symmetric, for a whole cloud: a one-sided view lacks the
+        far side that the gallery-to-query matches would look for."""
+        R, t = icp_symmetric(self.src, gallery.points, gallery.tree, hyp.R, hyp.t,
+                             self.opts.symmetric_iterations, self.opts.icp_trim,
+                             reverse_trim=self.opts.symmetric_reverse_trim)
+        return self.refine(R, t, gallery, 0, hyp.source + "+sym", coarse=False)
+
     def best_pose(self, matched: list[Prepared], verifiers: list[Prepared], groups=None) -> tuple[int, Hypothesis]:
         """(index into verifiers of the best-fitting object, its refined hypothesis).
 
@@ -257,7 +271,8 @@ class Registrar:
         """
         self.clock.lap("gallery_features")   # what the caller spent preparing the candidates
         pool = []
-        seeders = verifiers if self.opts.seed_all_candidates else matched
+        n_seed = len(verifiers) if self.opts.seeders <= 0 else max(len(matched), self.opts.seeders)
+        seeders = verifiers[:n_seed]
         for g in seeders:
             pool += _distinct(sorted(self.seeds(g), key=lambda h: h.chamfer), 2)
         # the best few distinct rotations go to the vote; the rest only cost time
@@ -289,7 +304,12 @@ class Registrar:
         self.clock.lap("verification")
         refined = [self._final(best, g, row[k]) for g, row in zip(verifiers, votes)]
         j = int(np.argmin([h.chamfer for h in refined]))
-        avg = _average(refined, refined[j], self.opts.average_within)
+        agree = _agreeing(refined, refined[j], self.opts.average_within)
+        if self.viewpoint is None and self.opts.refine and self.opts.symmetric_iterations > 0:
+            agree = [self._symmetric(refined[n], verifiers[n]) for n in agree]
+        else:
+            agree = [refined[n] for n in agree]
+        avg = _average(agree, refined[j])
         final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
         self.clock.lap("refinement")
         return j, final
@@ -299,16 +319,21 @@ def _resumed(vote: Hypothesis, source: str) -> Hypothesis:
     return Hypothesis(vote.R, vote.t, vote.fitness, vote.rmse, vote.chamfer, source, vote.icp_prev, vote.icp_moving)
 
 
-def _average(hyps: list[Hypothesis], anchor: Hypothesis, within: float) -> Hypothesis:
-    """Pose averaged over the candidates that agree with the best one and fit nearly as well.
+def _agreeing(hyps: list[Hypothesis], anchor: Hypothesis, within: float) -> list[int]:
+    """Indices of the candidates whose pose agrees with the best one's and that fit nearly as well."""
+    cos_max = np.cos(np.radians(15.0))
+    return [n for n, h in enumerate(hyps)
+            if (np.trace(h.R @ anchor.R.T) - 1) / 2 > cos_max and h.chamfer <= within * anchor.chamfer]
+
+
+def _average(agree: list[Hypothesis], anchor: Hypothesis) -> Hypothesis:
+    """Pose averaged over candidates that agree (see _agreeing).
 
     Each pre-aligned candidate gives its own estimate of the query's canonical pose, off by how
     that instance differs from the query; averaging cancels much of that. Equal weights: fit
     differences between instances that all sit well say little about whose frame is truer, and
     an exact gallery match stands alone anyway, since no relative fits within a factor of it.
     """
-    cos_max = np.cos(np.radians(15.0))
-    agree = [h for h in hyps if (np.trace(h.R @ anchor.R.T) - 1) / 2 > cos_max and h.chamfer <= within * anchor.chamfer]
     U, _, Vt = np.linalg.svd(sum(h.R for h in agree))
     R = U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))]) @ Vt
     t = np.mean([h.t for h in agree], axis=0)

@@ -110,7 +110,13 @@ def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
             assert publish_until(pub, xyz_to_pointcloud2(g.points, _header(7)),
                                  lambda: answered(first) and answered(second) and len(poses) >= 2)
             assert wait_for(lambda: {"pcrp_node: segmented_object", "pcrp_node_2: segmented_object"} <= names, 5)
-            assert wait_for(lambda: len(poses) == answered(first) + answered(second), 10)
+            # each node works in a thread of its own: a cloud received while it was busy may still
+            # be waiting in its slot, so wait until every received cloud is decided and its pose is in
+            decided = lambda n: sum(n.stats["segmented_object"].counts[k]  # noqa: E731
+                                    for k in ("answered", "rejected", "dropped_stale"))
+            assert wait_for(lambda: all(decided(n) == n.stats["segmented_object"].counts["received"]
+                                        for n in (first, second))
+                            and len(poses) == answered(first) + answered(second), 20)
         # one answer per instance per cloud received, all with the cloud's header and the same pose
         assert len(poses) == answered(first) + answered(second)
         assert all(p.header == poses[0].header for p in poses)

@@ -13,7 +13,7 @@ from pcrp_core.pose import PoseOptions, Registrar, prepare
 # the best-fitting of those hypotheses; one retrieved object, no principal-axis or half-turn
 # hypotheses, no candidate vote, no ICP.
 PAPER_OPTIONS = PoseOptions(pca_hypotheses=False, flips=False, refine=False, consensus=False,
-                            seed_all_candidates=False, reverse_weight=0.0)
+                            seeders=1, reverse_weight=0.0)
 
 
 def paper_variant(model):
