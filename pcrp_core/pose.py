@@ -258,7 +258,7 @@ class Registrar:
         far side that the gallery-to-query matches would look for."""
         R, t = icp_symmetric(self.src, gallery.points, gallery.tree, hyp.R, hyp.t,
                              self.opts.symmetric_iterations, self.opts.icp_trim,
-                             reverse_trim=self.opts.symmetric_reverse_trim)
+                             reverse_trim=self.opts.symmetric_reverse_trim, dense_src=self.query.points)
         return self.refine(R, t, gallery, 0, hyp.source + "+sym", coarse=False)
 
     def best_pose(self, matched: list[Prepared], verifiers: list[Prepared], groups=None) -> tuple[int, Hypothesis]:
