@@ -351,7 +351,7 @@ def why_unmet(res: dict) -> list[str]:
                    "is what buys the accuracy in the table above and in RESULTS.md, where the paper's bare method (one "
                    "retrieved object, RANSAC only) runs about ten times faster but puts fewer than half as many poses within "
                    "5°. The default 16 candidates cost about 1.7x the time of 8, and measured on the evaluation's "
-                   "queries (seed 0) 8 gave chair / sofa mean errors of 21.7° / 12.5° where 16 give 11.7° / 7.6°; "
+                   "queries (seed 0) 8 gave chair / sofa mean errors of 18.0° / 11.0° where 16 give 10.8° / 7.0°; "
                    "fewer hypotheses or coarser ICP saved at most 20 % and cost accuracy too. So the defaults stay, "
                    "and a user who needs latency more than accuracy lowers the node's `n_candidates`.")
     if res.get("node") and not v.get(TARGETS[2][0], (None, True))[1]:

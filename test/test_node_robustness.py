@@ -116,7 +116,8 @@ def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
                                     for k in ("answered", "rejected", "dropped_stale"))
             assert wait_for(lambda: all(decided(n) == n.stats["segmented_object"].counts["received"]
                                         for n in (first, second))
-                            and len(poses) == answered(first) + answered(second), 20)
+                            and len(poses) == answered(first) + answered(second), 60), \
+                ([dict(n.stats["segmented_object"].counts) for n in (first, second)], len(poses))
         # one answer per instance per cloud received, all with the cloud's header and the same pose
         assert len(poses) == answered(first) + answered(second)
         assert all(p.header == poses[0].header for p in poses)
