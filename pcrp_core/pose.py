@@ -304,11 +304,11 @@ class Registrar:
         self.clock.lap("verification")
         refined = [self._final(best, g, row[k]) for g, row in zip(verifiers, votes)]
         j = int(np.argmin([h.chamfer for h in refined]))
-        agree = _agreeing(refined, refined[j], self.opts.average_within)
+        near = _agreeing(refined, refined[j], self.opts.average_within)
         if self.viewpoint is None and self.opts.refine and self.opts.symmetric_iterations > 0:
-            agree = [self._symmetric(refined[n], verifiers[n]) for n in agree]
+            agree = [self._symmetric(refined[n], verifiers[n]) for n in near]
         else:
-            agree = [refined[n] for n in agree]
+            agree = [refined[n] for n in near]
         avg = _average(agree, refined[j])
         final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
         self.clock.lap("refinement")
