@@ -13,22 +13,23 @@ _SUBSETS: dict[tuple, PCRP] = {}
 
 
 def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | None, progress=None,
-                 n_jobs: int | None = None, log=print, split: str = "train", views: int = 0) -> Path:
-    """The model of these categories' train (or test) splits, at most `limit` objects each, built
-    with the package's defaults and seed 0 (and `views` one-sided views per object, as
-    `pcrp build --views` makes for depth cameras), reused while its recipe is unchanged."""
+                 n_jobs: int | None = None, log=print, split: str = "train", views: int = 0) -> tuple[Path, bool]:
+    """(path, whether it was built now) of the model of these categories' train (or test) splits,
+    at most `limit` objects each, built with the package's defaults and seed 0 (and `views`
+    one-sided views per object, as `pcrp build --views` makes for depth cameras), reused while
+    its recipe is unchanged."""
     path = Path(cache) / name
     recipe = {"categories": list(categories), "limit": limit, "data": str(Path(data).resolve()), "split": split, "views": views}
     stamp = path / "eval_recipe.json"
     if stamp.is_file() and json.loads(stamp.read_text()) == recipe:
-        return path
+        return path, False
     objects = load_sources([str(Path(data) / f"{c}.npz") for c in categories], split=split, limit_per_category=limit)
     log(f"building {name}: {len(objects)} {split} objects of {len(categories)} categories, {views} views each")
     model = PCRP.build(objects, sources=[f"{c}.npz" for c in categories], views=views, progress=progress,
                        n_jobs=n_jobs)
     model.save(path)
     stamp.write_text(json.dumps(recipe))
-    return path
+    return path, True
 
 
 def loaded(path) -> PCRP:

@@ -274,7 +274,8 @@ def write_report(s, res: dict) -> Path:
     lines = ["# Evaluation on ModelNet40: the paper's experiments, the baselines beside them", "",
              f"Regenerate with `pcrp eval --data ../shared/data/modelnet40 --out docs/results --seed {res['seed']}"
              f"{flags}`. Run {res['date']} on {res['machine']['cores']} cores "
-             f"({res['machine']['cpu']}), {sec.get('total', 0) / 60:.0f} minutes in all. Test objects per category: "
+             f"({res['machine']['cpu']}), {sec.get('total', 0) / 60:.0f} minutes in all"
+             f"{' (with models built by an earlier run)' if None in sec.values() else ''}. Test objects per category: "
              f"{per}; every random rotation, translation, point order, cut and viewpoint comes from seed "
              f"{res['seed']} (run with `--seed N` to draw others).", "",
              "Data: `../shared/data/modelnet40`, 1024 points per object where the paper had 2048. Gallery: the "
@@ -376,7 +377,7 @@ def write_report(s, res: dict) -> Path:
                   f"| gallery categories: right among accepted | {_pct(rj['inside_right_among_accepted'])} |", ""]
     lines += ["## Reading these figures", "", *failure_bands(res), NOTES, ""]
     lines += ["## Run time", "", "| part | minutes |", "|---|---|",
-              *[f"| {k} | {v / 60:.1f} |" for k, v in sec.items()], ""]
+              *[f"| {k} | {'cached from an earlier run' if v is None else f'{v / 60:.1f}'} |" for k, v in sec.items()], ""]
     path = out / "RESULTS.md"
     path.write_text("\n".join(lines))
     return path
