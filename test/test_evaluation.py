@@ -92,7 +92,7 @@ def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     text = (out / "RESULTS.md").read_text()
     for heading in ("## The bar", "## What the data allows", "## Pose estimation", "### The narrower protocol", "## Partial views",
-                    "## Registration", "## Retrieval", "## A larger gallery", "## Rejection"):
+                    "## Registration", "## Retrieval", "## A larger gallery", "## Rejection", "## Held-out check"):
         assert heading in text
     assert (out / "pose_cdf.png").stat().st_size > 10_000 and (out / "pose_examples.png").stat().st_size > 10_000
     res = json.loads((out / "results.json").read_text())
@@ -102,6 +102,13 @@ def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
     for setting in ("aligned", "arbitrary"):
         d = res["retrieval"][setting]
         assert d["best_top1_chamfer"] <= min(d[m]["top1_chamfer"] for m in ("pcrp_vlad", "pcrp_max", "fpfh_vlad"))
+    # the held-out check's queries are train objects its model was built without
+    from pcrp_core import PCRP
+    held = {r["name"] for r in res["holdout"]["rows"]}
+    from pcrp_core.evaluation.protocol import load_split
+    train = {n for c in ("airplane", "chair", "sofa", "car") for n in load_split(MODELNET, c, "train")[0]}
+    assert len(held) == 12 and held <= train
+    assert not held & set(PCRP.load(tmp_path / "cache" / "model4_holdout_quick").gallery_ids)
     uniform = res["pose"]["uniform"]["summary"]
     assert uniform["all"]["pcrp"]["n"] == 12 and set(uniform["all"]) >= {"pcrp", "pcrp_paper", "icp", "fgr_icp", "ransac_icp"}
     # the package's extensions (candidate vote, half turns, ICP) over the paper's bare registration

@@ -29,13 +29,15 @@ def _subsample(points: np.ndarray, seed: int) -> np.ndarray:
     return points[idx] - points.mean(0)
 
 
-def _gallery(data, category: str):
-    """(train clouds subsampled, their trees), once per process and category."""
-    if category not in _GALLERIES:
-        _, pts = load_split(data, category, "train")
-        clouds = [_subsample(p, i) for i, p in enumerate(pts)]
-        _GALLERIES[category] = (np.stack(clouds), [cKDTree(c) for c in clouds])
-    return _GALLERIES[category]
+def _gallery(data, category: str, exclude=()):
+    """(train clouds subsampled, their trees), but those named in exclude, once per process and category."""
+    key = (category, tuple(exclude))
+    if key not in _GALLERIES:
+        names, pts = load_split(data, category, "train")
+        skip = set(exclude)
+        clouds = [_subsample(p, i) for i, (n, p) in enumerate(zip(names, pts)) if n not in skip]
+        _GALLERIES[key] = (np.stack(clouds), [cKDTree(c) for c in clouds])
+    return _GALLERIES[key]
 
 
 def chamfer_by_rotation(query: np.ndarray, clouds: np.ndarray, trees) -> np.ndarray:
@@ -49,9 +51,10 @@ def chamfer_by_rotation(query: np.ndarray, clouds: np.ndarray, trees) -> np.ndar
 
 
 def audit_one(state: dict, item) -> dict:
-    """item: (name, category, points) of one test object."""
+    """item: (name, category, points) of one test object (or of a train object named in
+    state["exclude"][category], which the train objects it is compared with then leave out)."""
     name, category, points = item
-    clouds, trees = _gallery(state["data"], category)
+    clouds, trees = _gallery(state["data"], category, state.get("exclude", {}).get(category, ()))
     cost = chamfer_by_rotation(_subsample(points, 0), clouds, trees)
     best = cost.argmin(1)
     nearest = np.argsort(cost.min(1))

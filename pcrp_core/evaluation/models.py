@@ -3,8 +3,12 @@ loaded once per worker process."""
 from __future__ import annotations
 
 import json
+import zlib
 from pathlib import Path
 
+import numpy as np
+
+from pcrp_core.evaluation.protocol import load_split
 from pcrp_core.pipeline import PCRP
 from pcrp_core.sources import load_sources
 
@@ -13,23 +17,38 @@ _SUBSETS: dict[tuple, PCRP] = {}
 
 
 def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | None, progress=None,
-                 n_jobs: int | None = None, log=print, split: str = "train", views: int = 0) -> tuple[Path, bool]:
+                 n_jobs: int | None = None, log=print, split: str = "train", views: int = 0,
+                 holdout: int = 0) -> tuple[Path, bool]:
     """(path, whether it was built now) of the model of these categories' train (or test) splits,
     at most `limit` objects each, built with the package's defaults and seed 0 (and `views`
     one-sided views per object, as `pcrp build --views` makes for depth cameras), reused while
-    its recipe is unchanged."""
+    its recipe is unchanged. holdout: that many objects of each category (held_out()) are kept out."""
     path = Path(cache) / name
     recipe = {"categories": list(categories), "limit": limit, "data": str(Path(data).resolve()), "split": split, "views": views}
+    if holdout:     # only then: models cached before the held-out check keep their recipe
+        recipe["holdout"] = holdout
     stamp = path / "eval_recipe.json"
     if stamp.is_file() and json.loads(stamp.read_text()) == recipe:
         return path, False
     objects = load_sources([str(Path(data) / f"{c}.npz") for c in categories], split=split, limit_per_category=limit)
+    if holdout:
+        kept_out = {name for c in categories for name in held_out(data, c, holdout, split)}
+        objects = [o for o in objects if o.gallery_id not in kept_out]
     log(f"building {name}: {len(objects)} {split} objects of {len(categories)} categories, {views} views each")
     model = PCRP.build(objects, sources=[f"{c}.npz" for c in categories], views=views, progress=progress,
                        n_jobs=n_jobs)
     model.save(path)
     stamp.write_text(json.dumps(recipe))
     return path, True
+
+
+def held_out(data: Path, category: str, n: int, split: str = "train") -> list[str]:
+    """Names of n objects of a category's split, drawn by a fixed generator (at most a third of
+    the split, so the gallery keeps most of it), for a model built without them."""
+    names, _ = load_split(data, category, split)
+    n = min(n, len(names) // 3)
+    pick = np.random.default_rng([2026, zlib.crc32(category.encode())]).choice(len(names), n, replace=False)
+    return [names[i] for i in sorted(pick)]
 
 
 def loaded(path) -> PCRP:
