@@ -253,13 +253,12 @@ class Registrar:
                                     [hyp.source], coarse=False, prev=[vote.icp_prev])[0]
         return self.refine(hyp.R, hyp.t, gallery, opts.icp_iterations, hyp.source, coarse=False)
 
-    def _symmetric(self, hyp: Hypothesis, gallery: Prepared) -> Hypothesis:
-        """hyp refined further by icp_symmetric, for a whole cloud: a one-sided view lacks the
-        far side that the gallery-to-query matches would look for."""
-        R, t = icp_symmetric(self.src, gallery.points, gallery.tree, hyp.R, hyp.t,
+    def _symmetric(self, hyp: Hypothesis, gallery: Prepared) -> tuple[np.ndarray, np.ndarray]:
+        """(R, t) of hyp refined further by icp_symmetric, for a whole cloud: a one-sided view
+        lacks the far side that the gallery-to-query matches would look for."""
+        return icp_symmetric(self.src, gallery.points, gallery.tree, hyp.R, hyp.t,
                              self.opts.symmetric_iterations, self.opts.icp_trim,
                              reverse_trim=self.opts.symmetric_reverse_trim, dense_src=self.query.points)
-        return self.refine(R, t, gallery, 0, hyp.source + "+sym", coarse=False)
 
     def best_pose(self, matched: list[Prepared], verifiers: list[Prepared], groups=None) -> tuple[int, Hypothesis]:
         """(index into verifiers of the best-fitting object, its refined hypothesis).
@@ -306,10 +305,11 @@ class Registrar:
         j = int(np.argmin([h.chamfer for h in refined]))
         near = _agreeing(refined, refined[j], self.opts.average_within)
         if self.viewpoint is None and self.opts.refine and self.opts.symmetric_iterations > 0:
-            agree = [self._symmetric(refined[n], verifiers[n]) for n in near]
+            poses = [self._symmetric(refined[n], verifiers[n]) for n in near]
         else:
-            agree = [refined[n] for n in near]
-        avg = _average(agree, refined[j])
+            poses = [(refined[n].R, refined[n].t) for n in near]
+        # only the poses are averaged; the result is scored once, on the best candidate
+        avg = _average(poses, refined[j])
         final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
         self.clock.lap("refinement")
         return j, final
@@ -326,18 +326,18 @@ def _agreeing(hyps: list[Hypothesis], anchor: Hypothesis, within: float) -> list
             if (np.trace(h.R @ anchor.R.T) - 1) / 2 > cos_max and h.chamfer <= within * anchor.chamfer]
 
 
-def _average(agree: list[Hypothesis], anchor: Hypothesis) -> Hypothesis:
-    """Pose averaged over candidates that agree (see _agreeing).
+def _average(poses: list[tuple[np.ndarray, np.ndarray]], anchor: Hypothesis) -> Hypothesis:
+    """The (R, t) poses of candidates that agree (see _agreeing) averaged, carrying the anchor's scores.
 
     Each pre-aligned candidate gives its own estimate of the query's canonical pose, off by how
     that instance differs from the query; averaging cancels much of that. Equal weights: fit
     differences between instances that all sit well say little about whose frame is truer, and
     an exact gallery match stands alone anyway, since no relative fits within a factor of it.
     """
-    U, _, Vt = np.linalg.svd(sum(h.R for h in agree))
+    U, _, Vt = np.linalg.svd(sum(R for R, _ in poses))
     R = U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))]) @ Vt
-    t = np.mean([h.t for h in agree], axis=0)
-    return Hypothesis(R, t, anchor.fitness, anchor.rmse, anchor.chamfer, anchor.source + f"+avg{len(agree)}")
+    t = np.mean([t for _, t in poses], axis=0)
+    return Hypothesis(R, t, anchor.fitness, anchor.rmse, anchor.chamfer, anchor.source + f"+avg{len(poses)}")
 
 
 def _distinct(hyps, n, min_angle_deg=10.0):
