@@ -40,6 +40,9 @@ def register_build(sub) -> None:
     p.add_argument("--limit", type=int, default=None, help="at most this many objects per source category")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--jobs", type=int, default=None, help="processes describing objects (default: one per core)")
+    p.add_argument("--up-axis", default=None, choices=["x", "y", "z", "-x", "-y", "-z"],
+                   help="the objects' up axis in their own frame, so queries may state which way is up "
+                        "(default: what the sources say: z for ModelNet40 and the generator, none for folders)")
     p.set_defaults(func=_build)
 
 
@@ -57,13 +60,15 @@ def _build(args) -> int:
     print(f"{len(objects)} objects in {len(set(o.category for o in objects))} categories; fitting...", file=sys.stderr)
     model = PCRP.build(objects, hop1=args.hop1, n_clusters=args.clusters, aggregation=args.aggregation,
                        n_points=args.n_points, views=args.views, seed=args.seed, sources=args.sources, progress=_progress,
-                       n_jobs=args.jobs)
+                       n_jobs=args.jobs, up_axis=args.up_axis)
     model.save(args.out)
     size = model_size(args.out)
     print(f"built {args.out}: {len(objects)} objects, categories {', '.join(model.categories)}, "
           f"feature dimension {model.pointhop.n_features_}, descriptor dimension {model.gallery.vectors.shape[1]}, "
           f"{time.perf_counter() - t0:.1f} s, {size / 1e6:.2f} MB on disk "
-          f"({model.size_report()})")
+          f"({model.size_report()}); "
+          + (f"up axis {_axis_name(model.up_axis)}" if model.up_axis is not None
+             else "no up axis recorded (--up-axis to give one)"))
     return 0
 
 
@@ -74,6 +79,11 @@ def register_query(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--candidates", type=int, default=None, help="gallery objects to verify (n_candidates)")
     p.add_argument("--min-score", type=float, default=None, help="reject below this fit score")
+    p.add_argument("--up", default=None, metavar="X,Y,Z",
+                   help="which way is up in the cloud's frame, if known: answers then keep the object upright "
+                        "within --up-tolerance (write --up=-1,0,0 when the first number is negative)")
+    p.add_argument("--up-tolerance", type=float, default=None, metavar="DEG",
+                   help="how far an answer may tip the object from --up (default 60)")
     p.set_defaults(func=_query)
 
 
@@ -89,10 +99,15 @@ def _query(args) -> int:
         points = read_points(args.cloud)
     except (OSError, ValueError) as e:
         return _fail(f"{args.cloud}: {e}")
-    opts = {k: v for k, v in (("n_candidates", args.candidates), ("min_score", args.min_score)) if v is not None}
+    opts = {k: v for k, v in (("n_candidates", args.candidates), ("min_score", args.min_score),
+                              ("up_tolerance_deg", args.up_tolerance)) if v is not None}
+    try:
+        up = None if args.up is None else [float(v) for v in args.up.split(",")]
+    except ValueError:
+        return _fail(f"--up {args.up!r}: expected three numbers, e.g. 0,0,1")
     try:
         model.set_options(**opts)
-        result = model.estimate(points)
+        result = model.estimate(points, up=up)
     except (InvalidCloud, ValueError) as e:
         return _fail(f"{args.cloud}: {e}")
     if args.json:
@@ -141,6 +156,15 @@ def _eval(args) -> int:
     path = write(settings, res)
     print(f"wrote {path} ({res['seconds']['total'] / 60:.1f} minutes)")
     return 0
+
+
+def _axis_name(v) -> str:
+    import numpy as np
+    for name, axis in (("x", (1, 0, 0)), ("y", (0, 1, 0)), ("z", (0, 0, 1))):
+        for sign in ("", "-"):
+            if np.allclose(v, np.array(axis) * (-1 if sign else 1)):
+                return sign + name
+    return ",".join(f"{x:.3f}" for x in v)
 
 
 def format_result(r) -> str:

@@ -47,6 +47,30 @@ def _view_directions(n: int) -> np.ndarray:
     return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
 
 
+AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+
+def _unit_axis(axis) -> np.ndarray:
+    """A unit vector from "x", "-z", ... or three numbers; ValueError otherwise."""
+    if isinstance(axis, str):
+        name = axis.strip().lower()
+        sign = -1.0 if name.startswith("-") else 1.0
+        if name.lstrip("+-") not in AXES:
+            raise ValueError(f"up axis {axis!r}: expected x, y, z, -x, -y or -z")
+        return sign * np.array(AXES[name.lstrip("+-")])
+    v = np.asarray(axis, dtype=np.float64).reshape(-1)
+    if v.shape != (3,) or not np.all(np.isfinite(v)) or np.linalg.norm(v) < 1e-9:
+        raise ValueError(f"up axis {axis!r}: expected a finite, non-zero 3-vector")
+    return v / np.linalg.norm(v)
+
+
+def _common_up(objects) -> np.ndarray | None:
+    """The up axis all objects' sources state, None when any is silent or they disagree (a
+    mixed gallery has no one up axis to hold answers to)."""
+    ups = {tuple(np.round(_unit_axis(o.up), 6)) if getattr(o, "up", None) is not None else None for o in objects}
+    return np.array(ups.pop()) if len(ups) == 1 and None not in ups else None
+
+
 def _rms_radius(points: np.ndarray) -> float:
     return float(np.sqrt(((points - points.mean(0)) ** 2).sum(1).mean()))
 
@@ -88,6 +112,14 @@ class PCRP:
     def refine(self, value: bool) -> None:
         self.pose_options.refine = bool(value)
 
+    @property
+    def up_tolerance_deg(self) -> float:
+        return self.pose_options.up_tolerance_deg
+
+    @up_tolerance_deg.setter
+    def up_tolerance_deg(self, value: float) -> None:
+        self.pose_options.up_tolerance_deg = float(value)
+
     def set_options(self, **options) -> None:
         """Set runtime options, refusing invalid values with a ValueError that says why."""
         checks = {
@@ -99,6 +131,7 @@ class PCRP:
             "max_points": lambda v: isinstance(v, int) and 64 <= v <= 100_000,
             "scale_mode": lambda v: v in SCALE_MODES,
             "seed": lambda v: isinstance(v, int),
+            "up_tolerance_deg": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and 0.0 < v <= 180.0,
         }
         for name, value in options.items():
             if name not in checks:
@@ -151,7 +184,7 @@ class PCRP:
     def build(cls, objects, *, hop1: str = "fpfh", n_clusters: int = 10, aggregation: str = "vlad",
               n_points: int = 1024, fit_clouds: int = 400, energy_threshold1: float = 1e-3,
               energy_threshold2: float = 5e-4, views: int = 0, seed: int = 0, sources=(),
-              progress=None, n_jobs: int | None = None) -> "PCRP":
+              progress=None, n_jobs: int | None = None, up_axis=None) -> "PCRP":
         """Fit FR-PointHop and the VLAD codebook on the gallery, then describe every object.
 
         objects: GalleryObject-like items (gallery_id, category, points), pre-aligned.
@@ -160,10 +193,13 @@ class PCRP:
         many one-sided views (what a depth camera sees from evenly spread directions), so that
         one-sided queries find their object; progress wraps iterables (e.g. tqdm); n_jobs
         processes describe the objects (default: one per core; the result does not depend on it).
+        up_axis: the objects' up axis in their canonical frame; by default the one their sources
+        state (GalleryObject.up) when they all agree, else none recorded.
         """
         objects = list(objects)
         if not objects:
             raise ValueError("cannot build a model from an empty gallery")
+        up_axis = _common_up(objects) if up_axis is None else _unit_axis(up_axis)
         clouds = [downsample(finite_points(o.points), n_points, seed) for o in objects]
         unit = float(np.median([np.linalg.norm(c - c.mean(0), axis=1).max() for c in clouds]))
         normed = [(c - c.mean(0)) / unit for c in clouds]
@@ -188,6 +224,7 @@ class PCRP:
         gallery = Gallery([o.gallery_id for o in objects], [o.category for o in objects],
                           [c.astype(np.float32) for c in clouds], np.stack(vectors), np.array(owners))
         meta = {"sources": list(sources), "n_objects": len(objects), "n_points": n_points, "views": views,
+                "up_axis": None if up_axis is None else [float(v) for v in up_axis],
                 "feature_dim": int(pointhop.n_features_), "built": time.strftime("%Y-%m-%dT%H:%M:%S")}
         return cls(pointhop, vlad, gallery, unit, meta, n_points)
 
@@ -220,6 +257,8 @@ class PCRP:
             if vlad.aggregation == "vlad":
                 vlad.codebook_ = arrays["vlad_codebook"]
             gallery = Gallery.from_arrays(meta["gallery_ids"], meta["gallery_categories"], arrays)
+            if meta.get("up_axis") is not None:
+                meta["up_axis"] = [float(v) for v in _unit_axis(meta["up_axis"])]
             model = cls(pointhop, vlad, gallery, meta["unit"], meta, meta["n_points"])
         except (KeyError, TypeError, ValueError) as e:
             raise ModelError(f"{path}: model contents are incomplete or inconsistent ({type(e).__name__}: {e})") from None
@@ -270,6 +309,25 @@ class PCRP:
             self._cache.popitem(last=False)
         return prep
 
+    @property
+    def up_axis(self) -> np.ndarray | None:
+        """The gallery objects' up axis in their canonical frame (unit vector), None when the
+        model does not say (models built before it was recorded, or from sources that disagree)."""
+        up = self.meta.get("up_axis")
+        return None if up is None else np.asarray(up, dtype=np.float64)
+
+    def _up_pair(self, up):
+        if up is None:
+            return None
+        u = np.asarray(up, dtype=np.float64).reshape(-1)
+        n = float(np.linalg.norm(u)) if u.shape == (3,) and np.all(np.isfinite(u)) else 0.0
+        if n < 1e-9:
+            raise ValueError(f"up must be a finite, non-zero 3-vector, not {up!r}")
+        if self.up_axis is None:
+            raise ValueError("this model does not record its objects' up axis; rebuild it with "
+                             "`pcrp build --up-axis` to use an up direction")
+        return u / n, self.up_axis
+
     def _viewpoint(self, viewpoint, centre):
         return None if viewpoint is None else (np.asarray(viewpoint, dtype=np.float64) - centre) / self.unit
 
@@ -280,14 +338,18 @@ class PCRP:
         idx, dist = self.gallery.search(vec, k)
         return [(self.gallery.ids[i], float(d)) for i, d in zip(idx, dist)]
 
-    def estimate(self, points, viewpoint=None) -> PoseResult:
+    def estimate(self, points, viewpoint=None, up=None) -> PoseResult:
         """Retrieve, register, verify. Raises InvalidCloud for input no pose can be read from.
 
         viewpoint: the sensor's position in the cloud's frame when the cloud is what one sensor
         saw (np.zeros(3) for a cloud in the camera's own frame); None for complete objects.
+        up: which way is up in the cloud's frame (against gravity), when the caller knows it;
+        answers then keep the gallery's up axis (`up_axis`) within pose_options.up_tolerance_deg
+        of it. None: any orientation.
         """
         t0 = time.perf_counter()
         timings = {}
+        up_pair = self._up_pair(up)
         pts = self._clean(points)
         centre = pts.mean(0)
         # size: how much the query is scaled before anything is computed on it (1 in metric mode;
@@ -311,7 +373,7 @@ class PCRP:
         if self.scale_mode == "normalize":
             ratio = self._radii[idx[0]] / float(np.median(self._radii))
         registrar = Registrar(prepare(normed * ratio, sampled, feats), self.pose_options, rng,
-                              None if vp is None else vp * ratio, timings)
+                              None if vp is None else vp * ratio, timings, up_pair)
         top = [int(i) for i in idx[: self.n_candidates]]
         matched = [self._prepared(i, features=True) for i in top[: self.n_matched]]
         verifiers = matched + [self._prepared(i, features=False) for i in top[self.n_matched:]]

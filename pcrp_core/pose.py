@@ -83,6 +83,10 @@ class PoseOptions:
     icp_points: int = 256
     coarse_points: int = 256
     inlier_distance: float = 0.05
+    # with a known up direction (estimate(up=...)): hypotheses tipping the gallery object's up axis
+    # further than this from it are dropped. Wide, since objects lean and rest on their sides too;
+    # what it removes are the upside-down and lying-down turns of near-symmetric shapes.
+    up_tolerance_deg: float = 60.0
 
 
 @dataclass
@@ -114,19 +118,23 @@ def _proper_signed_permutations() -> np.ndarray:
 AXIS_ROTATIONS = _proper_signed_permutations()
 
 
-def _pca_seeds(q: np.ndarray, g: np.ndarray, src: np.ndarray, tree: cKDTree, keep: int, prefilter: int = 0):
+def _pca_seeds(q: np.ndarray, g: np.ndarray, src: np.ndarray, tree: cKDTree, keep: int, prefilter: int = 0,
+               upright=None):
     """Rotations taking the query's principal axes onto the gallery's under each of the 24
     axis-to-axis maps (two instances of a category need not order their axes alike), the
     `keep` that fit best before any refinement: right for complete objects, a cheap extra
     guess for partial ones.
 
     prefilter > 0: rank all 24 on that many of the points first and score only the best
-    2 * keep on all of them; most axis maps are grossly wrong, and a few points say so."""
+    2 * keep on all of them; most axis maps are grossly wrong, and a few points say so.
+    upright: a mask function over rotations; the maps it refuses are not considered."""
     Rs, ts = _pca_rotations(q, g)
     short = np.arange(len(Rs))
-    if 0 < prefilter < len(src) and 2 * keep < len(Rs):
-        rough = _mean_distance(src[:: max(1, len(src) // prefilter)], Rs, ts, tree)
-        short = np.sort(np.argsort(rough)[: 2 * keep])
+    if upright is not None and upright(Rs).any():
+        short = short[upright(Rs)]
+    if 0 < prefilter < len(src) and 2 * keep < len(short):
+        rough = _mean_distance(src[:: max(1, len(src) // prefilter)], Rs[short], ts[short], tree)
+        short = np.sort(short[np.argsort(rough)[: 2 * keep]])
     cost = _mean_distance(src, Rs[short], ts[short], tree)
     for n in short[np.argsort(cost)[:keep]]:
         yield Rs[n], ts[n], "pca"
@@ -171,13 +179,15 @@ class Registrar:
     """Holds the query's subsample used for ICP and scoring, so it is drawn once per query."""
 
     def __init__(self, query: Prepared, opts: PoseOptions, rng: np.random.Generator, viewpoint=None,
-                 timings: dict | None = None):
+                 timings: dict | None = None, up=None):
         """timings, when given, gets seconds added per stage: correspondences, ransac,
         hypotheses (principal axes, flips, their coarse ICP), verification (the vote) and
-        refinement (final ICP and averaging)."""
+        refinement (final ICP and averaging). up: (the up direction in the query's frame, the
+        gallery's up axis), unit vectors, when the caller knows which way is up."""
         self.query, self.opts, self.rng = query, opts, rng
         self.clock = Clock(timings)
         self.viewpoint = viewpoint
+        self.up = None if up is None else tuple(np.asarray(u, dtype=np.float64) for u in up)
         src = query.sampled if query.sampled is not None else query.points
         if len(src) > opts.icp_points:
             src = src[rng.choice(len(src), opts.icp_points, replace=False)]
@@ -226,21 +236,37 @@ class Registrar:
         k = max(1, int(0.8 * len(d)))
         return float(np.mean(np.partition(d, k - 1)[:k]))
 
+    def upright(self, Rs) -> np.ndarray:
+        """(H,) whether each query-to-gallery rotation keeps the gallery's up axis within
+        up_tolerance_deg of the known up direction (all true when up is unknown)."""
+        Rs = np.asarray(Rs).reshape(-1, 3, 3)
+        if self.up is None:
+            return np.ones(len(Rs), bool)
+        q_up, g_up = self.up
+        return (Rs @ q_up) @ g_up >= np.cos(np.radians(self.opts.up_tolerance_deg)) - 1e-9
+
+    def _keep_upright(self, hyps: list[Hypothesis]) -> list[Hypothesis]:
+        """The upright hypotheses; all of them when none is (a prior nothing satisfies, say a
+        wrong up parameter, is ignored rather than answered with nothing)."""
+        ok = self.upright([h.R for h in hyps]) if hyps else np.zeros(0, bool)
+        return [h for h, k in zip(hyps, ok) if k] or hyps
+
     def seeds(self, gallery: Prepared):
         """Coarsely refined hypotheses for one feature-bearing gallery object."""
         self.clock.lap("hypotheses")
         seeds = _ransac_seeds(self.query, gallery, self.opts, self.rng, self.clock) if gallery.features is not None else []
         if self.opts.pca_hypotheses or not seeds:
             seeds += list(_pca_seeds(self.query.points, gallery.points, self.coarse_src, gallery.tree,
-                                     self.opts.pca_seeds, self.opts.pca_prefilter))
+                                     self.opts.pca_seeds, self.opts.pca_prefilter,
+                                     None if self.up is None else self.upright))
         Rs, ts, sources = zip(*seeds)
         hyps = self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, sources)
         if self.opts.flips:
-            best = min(hyps, key=lambda h: h.chamfer)
+            best = min(self._keep_upright(hyps), key=lambda h: h.chamfer)
             Rs, ts = zip(*_flip(best.R, best.t, gallery.points.mean(0)))
             hyps += self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, [best.source + "+flip"] * len(Rs))
         self.clock.lap("hypotheses")
-        return hyps
+        return self._keep_upright(hyps)
 
     def _final(self, hyp: Hypothesis, gallery: Prepared, vote: Hypothesis) -> Hypothesis:
         """hyp fully refined on gallery. The vote already ran the first ICP iterations of that
@@ -274,6 +300,8 @@ class Registrar:
         seeders = verifiers[:n_seed]
         for g in seeders:
             pool += _distinct(sorted(self.seeds(g), key=lambda h: h.chamfer), 2)
+        # a seeder with no upright hypothesis hands back all of its own: drop those if others have some
+        pool = self._keep_upright(pool)
         # the best few distinct rotations go to the vote; the rest only cost time
         pool = _distinct(sorted(pool, key=lambda h: h.chamfer), self.opts.pool_size)
         if not self.opts.consensus or len(verifiers) == 1:

@@ -44,11 +44,15 @@ PARAMETERS = {
     "publish_aligned_model": (True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.", None, False),
     "sensor_at_origin": (True, "The cloud's frame is the sensor's own (one-sided views seen from its origin); "
                                "false for complete objects or clouds already in a world frame.", None, False),
+    "up_vector": ([0.0, 0.0, 0.0], "Which way is up (against gravity) in the input clouds' frame, if fixed and known: "
+                                   "[0, -1, 0] for a level camera's optical frame. Answers then keep the object "
+                                   "upright within up_tolerance_deg. [0, 0, 0]: unknown, any orientation.", None, False),
+    "up_tolerance_deg": (60.0, "How far an answer may tip the object from up_vector.", (1.0, 180.0), False),
     "qos_reliability": ("best_effort", "Input QoS reliability: best_effort (sensor data) or reliable.", None, True),
     "qos_depth": (2, "Input QoS queue depth.", (1, 100), True),
     "log_throttle_sec": (5.0, "Least seconds between two log lines of one kind.", (0.0, 3600.0), False),
 }
-MODEL_OPTIONS = ("min_points", "max_points", "n_candidates", "min_score", "scale_mode", "refine")
+MODEL_OPTIONS = ("min_points", "max_points", "n_candidates", "min_score", "scale_mode", "refine", "up_tolerance_deg")
 
 
 def _descriptor(name, default, description, bounds, read_only) -> ParameterDescriptor:
@@ -70,6 +74,7 @@ class PcrpNode(Node):
             raise ValueError(f"qos_reliability must be best_effort or reliable, not {p['qos_reliability']!r}")
         self.model = model if model is not None else PCRP.load(p["model_path"] or None)
         self.model.set_options(**{k: p[k] for k in MODEL_OPTIONS})
+        self._up = self._checked_up(p["up_vector"])
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
         qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p["qos_depth"],
@@ -104,12 +109,27 @@ class PcrpNode(Node):
                                f"{', '.join(s.topic_name for s in self.subscriptions)}")
 
     # -- parameters ---------------------------------------------------------------------------------
+    def _checked_up(self, value):
+        """up_vector as estimate() takes it (None for [0, 0, 0]); ValueError saying why it cannot be used."""
+        v = np.asarray(list(value), dtype=np.float64)
+        if v.shape != (3,) or not np.all(np.isfinite(v)):
+            raise ValueError(f"up_vector must be three finite numbers, not {list(value)!r}")
+        if not v.any():
+            return None
+        if self.model.up_axis is None:
+            raise ValueError("up_vector is set but the model does not record its objects' up axis "
+                             "(rebuild it with `pcrp build --up-axis`)")
+        return v / np.linalg.norm(v)
+
     def _on_set_parameters(self, params) -> SetParametersResult:
         changes = {p.name: p.value for p in params if p.name in MODEL_OPTIONS}
+        up = [p.value for p in params if p.name == "up_vector"]
         try:
+            new_up = self._checked_up(up[0]) if up else self._up
             self.model.set_options(**changes)   # validates every value before setting any
         except ValueError as e:
             return SetParametersResult(successful=False, reason=str(e))
+        self._up = new_up
         return SetParametersResult(successful=True)
 
     # -- receiving ------------------------------------------------------------------------------------
@@ -159,7 +179,7 @@ class PcrpNode(Node):
     def _answer(self, topic: str, header, points: np.ndarray, received: float) -> None:
         viewpoint = np.zeros(3) if self.get_parameter("sensor_at_origin").value else None
         try:
-            result = self.model.estimate(points, viewpoint=viewpoint)
+            result = self.model.estimate(points, viewpoint=viewpoint, up=self._up)
         except InvalidCloud as e:
             self._reject(topic, e.reason, str(e))
             return

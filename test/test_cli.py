@@ -28,6 +28,13 @@ def test_build_a_gallery_then_query_a_cloud_file(tmp_path):
     np.testing.assert_allclose(result["translation"], [1.0, 2.0, 3.0], atol=0.02)
     text = pcrp("query", str(model), str(cloud))
     assert "gallery_id  proc_chair_0002" in text.stdout and "quaternion" in text.stdout
+    # the generator's objects are z-up, so the model knows its up axis and a query may state up
+    assert "up axis z" in built.stdout
+    up = pcrp("query", str(model), str(cloud), "--json", "--up=" + ",".join(f"{v:.6f}" for v in R[:, 2]))
+    assert up.returncode == 0, up.stderr
+    np.testing.assert_allclose(np.array(json.loads(up.stdout)["rotation"]), R, atol=0.02)
+    bad = pcrp("query", str(model), str(cloud), "--up", "0,1")
+    assert bad.returncode == 2 and "up" in bad.stderr and "Traceback" not in bad.stderr
 
 
 def test_a_missing_model_or_cloud_fails_with_one_clear_line(tmp_path):

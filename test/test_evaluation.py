@@ -109,6 +109,10 @@ def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
     train = {n for c in ("airplane", "chair", "sofa", "car") for n in load_split(MODELNET, c, "train")[0]}
     assert len(held) == 12 and held <= train
     assert not held & set(PCRP.load(tmp_path / "cache" / "model4_holdout_quick").gallery_ids)
+    # told which way is up: a column of the held-out check and of the robot's views table, not of the paper's
+    assert all("pcrp_up" in r for r in res["holdout"]["rows"])
+    assert "pcrp_up" in res["partial_views"]["view"]["summary"]["all"] and "told which way is up" in text
+    assert "pcrp_up" not in res["pose"]["uniform"]["summary"]["all"]
     uniform = res["pose"]["uniform"]["summary"]
     assert uniform["all"]["pcrp"]["n"] == 12 and set(uniform["all"]) >= {"pcrp", "pcrp_paper", "icp", "fgr_icp", "ransac_icp"}
     # the package's extensions (candidate vote, half turns, ICP) over the paper's bare registration

@@ -12,7 +12,7 @@ from std_msgs.msg import Header, String
 from builtin_interfaces.msg import Time
 
 from helpers import random_pose, rotation_error_deg
-from pcrp_core import PCRP, default_model_path
+from pcrp_core import InvalidCloud, PCRP, default_model_path
 from pcrp_ros.conversions import xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode
 
@@ -128,6 +128,31 @@ def test_parameters_are_validated_at_runtime(model):
         ro = node.set_parameters([Parameter("model_path", value="/elsewhere")])[0]
         assert not ro.successful
         node.destroy_node()
+
+
+def test_up_vector_is_validated_and_reaches_the_core(model, monkeypatch):
+    import copy
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx)
+        assert node._up is None                                  # [0, 0, 0]: unknown
+        assert not node.set_parameters([Parameter("up_vector", value=[1.0, 2.0])])[0].successful
+        assert node.set_parameters([Parameter("up_vector", value=[0.0, -2.0, 0.0])])[0].successful
+        seen = []
+
+        def estimate(points, **kw):
+            seen.append(kw)
+            raise InvalidCloud("empty", "recorded, not answered")
+        monkeypatch.setattr(model, "estimate", estimate)
+        monkeypatch.setattr(model.pose_options, "up_tolerance_deg", model.up_tolerance_deg)  # restored after
+        node._answer("segmented_object", Header(), np.zeros((40, 3)), 0.0)
+        np.testing.assert_allclose(seen[0]["up"], [0.0, -1.0, 0.0])
+        assert node.set_parameters([Parameter("up_tolerance_deg", value=30.0)])[0].successful
+        assert model.up_tolerance_deg == 30.0
+        node.destroy_node()
+        silent = copy.copy(model)
+        silent.meta = {**model.meta, "up_axis": None}
+        with pytest.raises(ValueError, match="up axis"):
+            PcrpNode(model=silent, context=ctx, parameter_overrides=[Parameter("up_vector", value=[0.0, 0.0, 1.0])])
 
 
 def rclpy_node(ctx):

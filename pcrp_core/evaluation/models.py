@@ -29,6 +29,7 @@ def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | No
         recipe["holdout"] = holdout
     stamp = path / "eval_recipe.json"
     if stamp.is_file() and json.loads(stamp.read_text()) == recipe:
+        _record_up_axis(path)
         return path, False
     objects = load_sources([str(Path(data) / f"{c}.npz") for c in categories], split=split, limit_per_category=limit)
     if holdout:
@@ -40,6 +41,16 @@ def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | No
     model.save(path)
     stamp.write_text(json.dumps(recipe))
     return path, True
+
+
+def _record_up_axis(path: Path) -> None:
+    """Models cached before builds recorded the up axis get ModelNet's (z, as a build now
+    records it); nothing else in them depends on it, so they need no rebuild."""
+    meta_path = path / "model.json"
+    meta = json.loads(meta_path.read_text())
+    if "up_axis" not in meta:
+        meta["up_axis"] = [0.0, 0.0, 1.0]
+        meta_path.write_text(json.dumps(meta, indent=1))
 
 
 def held_out(data: Path, category: str, n: int, split: str = "train") -> list[str]:

@@ -15,9 +15,13 @@ METHODS = {
     "icp": "ICP alone, from the centroids' offset",
     "fgr_icp": "Open3D FPFH + FGR + ICP",
     "ransac_icp": "Open3D FPFH + RANSAC + ICP",
+    "pcrp_up": "PCRP told which way is up (a level camera, gravity known)",
 }
+# the paper's table: no method is told anything about the query's pose
+PAPER_METHODS = ("pcrp", "pcrp_paper", "icp", "fgr_icp", "ransac_icp")
 # what can answer a one-sided view (ICP alone from the centroids cannot: a view's centroid is off)
 VIEW_METHODS = ("pcrp", "pcrp_paper", "fgr_icp", "ransac_icp")
+ROBOT_VIEW_METHODS = VIEW_METHODS + ("pcrp_up",)
 BASELINES = {"icp": o3d_pipes.icp_only, "fgr_icp": o3d_pipes.fgr_icp, "ransac_icp": o3d_pipes.ransac_icp}
 RIGHT_DEG = 30.0   # an answer is "right" for the rejection table when under this and of the right category
 
@@ -34,6 +38,10 @@ def pose_one(state: dict, q) -> dict:
     if "pcrp_paper" in state["methods"]:
         p = paper_variant(model).estimate(q.points, viewpoint=q.viewpoint)
         row["pcrp_paper"] = {"error": geodesic_deg(p.rotation, q.R), "seconds": p.timings["total"]}
+    if "pcrp_up" in state["methods"]:
+        # the up direction a robot reads from gravity: the gallery's up axis as the query carries it
+        u = model.estimate(q.points, viewpoint=q.viewpoint, up=q.R @ model.up_axis)
+        row["pcrp_up"] = {"error": geodesic_deg(u.rotation, q.R), "seconds": u.timings["total"]}
     wanted = [m for m in BASELINES if m in state["methods"]]
     if wanted:
         target = o3d_pipes.prepare_target(model.gallery_cloud(r.gallery_id).astype(np.float64))

@@ -17,7 +17,7 @@ from pcrp_core.parallel import parallel_map
 
 EXPERIMENTS = ("frames", "registration", "retrieval", "pose", "holdout", "partial", "instances", "large", "rejection")
 HOLDOUT = 100                      # train objects per category kept out of the held-out check's model
-HOLDOUT_METHODS = ("pcrp", "pcrp_paper", "ransac_icp")
+HOLDOUT_METHODS = ("pcrp", "pcrp_up", "pcrp_paper", "ransac_icp")
 OUTSIDE_CATEGORIES = ("table", "bench", "lamp")
 
 
@@ -153,11 +153,12 @@ def run_instances(s: Settings, model_path) -> dict:
     test objects), seen whole with noise and one-sided from a random viewpoint."""
     out = {}
     model = loaded(model_path)
-    for name, cut, noise in (("whole", None, INSTANCE_NOISE), ("view", "view", 0.0)):
+    for name, cut, noise, methods in (("whole", None, INSTANCE_NOISE, pose_table.VIEW_METHODS),
+                                      ("view", "view", 0.0, pose_table.ROBOT_VIEW_METHODS)):
         qs = queries(s.data, PAPER_CATEGORIES, f"instances-{name}", s.seed, s.per_category, "uniform", cut, noise)
-        state = {"model": str(model_path), "per_category": False, "methods": pose_table.VIEW_METHODS}
+        state = {"model": str(model_path), "per_category": False, "methods": methods}
         rows = s.map(pose_table.pose_one, qs, state, f"known objects ({name})")
-        out[name] = {"summary": pose_table.summarise(rows, pose_table.VIEW_METHODS), "rows": rows}
+        out[name] = {"summary": pose_table.summarise(rows, methods), "rows": rows}
     out["objects"] = len(model.gallery)
     return out
 
@@ -214,8 +215,8 @@ def run(s: Settings) -> dict:
         timed("retrieval", run_retrieval, s, model4)
     settings = []
     if "pose" in s.experiments:
-        settings += [("uniform", "uniform", None, tuple(pose_table.METHODS)),
-                     ("euler45", "euler45", None, tuple(pose_table.METHODS))]
+        settings += [("uniform", "uniform", None, pose_table.PAPER_METHODS),
+                     ("euler45", "euler45", None, pose_table.PAPER_METHODS)]
     if "partial" in s.experiments:
         settings += [("view", "uniform", "view", pose_table.VIEW_METHODS)]
     if settings:
@@ -227,7 +228,7 @@ def run(s: Settings) -> dict:
         # what a robot user builds for a depth camera: the same gallery with one-sided views described
         views4 = built("model4_views" + suffix, PAPER_CATEGORIES, s.build_limit, views=VIEWS)
         timed("partial_views", run_pose, s, views4,
-              [("view", "uniform", "view", pose_table.VIEW_METHODS)])
+              [("view", "uniform", "view", pose_table.ROBOT_VIEW_METHODS)])
     if "instances" in s.experiments:
         instances = built("instances4", PAPER_CATEGORIES, None, split="test", views=VIEWS)
         timed("instances", run_instances, s, instances)

@@ -12,6 +12,7 @@ class GalleryObject:
     gallery_id: str
     category: str
     points: np.ndarray   # (N, 3) float32, the object's own canonical frame and units
+    up: str | None = None   # which canonical axis is up ("z", "-y", ...), when the source says
 
 
 def load_source(spec: str, split: str = "train", n_points: int = 1024, seed: int = 0,

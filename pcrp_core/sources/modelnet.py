@@ -24,7 +24,8 @@ def load_archive(path, split: str = "train", n_points: int = 1024, seed: int = 0
     for p, name in zip(points, names):
         if n_points < len(p):
             p = p[np.sort(rng.choice(len(p), n_points, replace=False))]
-        objects.append(GalleryObject(str(name), path.stem, np.asarray(p, dtype=np.float32)))
+        # ModelNet's own axes: z up (its README; airplanes and cars are flattest along z)
+        objects.append(GalleryObject(str(name), path.stem, np.asarray(p, dtype=np.float32), up="z"))
     return objects
 
 

@@ -136,5 +136,5 @@ def generate_gallery(n_per_category: int, seed: int = 0, n_points: int = 1024, s
     for c in categories:
         for k in range(n_per_category):
             gid = f"proc_{c}_t{k:03d}" if split == "test" else f"proc_{c}_{k:04d}"
-            objects.append(GalleryObject(gid, c, generate_object(c, seed * 10_000 + offset + k, n_points)))
+            objects.append(GalleryObject(gid, c, generate_object(c, seed * 10_000 + offset + k, n_points), up="z"))
     return objects

@@ -1,0 +1,74 @@
+"""Which way is up: a caller that knows gravity passes it, and answers keep the object upright."""
+import copy
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from pcrp_core import PCRP, ModelError, default_model_path
+from pcrp_core.sources import GalleryObject
+from pcrp_core.sources.procedural import generate_object
+
+
+@pytest.fixture(scope="module")
+def model():
+    return PCRP.load(default_model_path())
+
+
+def _tilt(result, model, up):
+    """Degrees between where the answer puts the gallery's up axis and the given up direction."""
+    a = result.rotation @ model.up_axis
+    return np.degrees(np.arccos(np.clip(a @ up / np.linalg.norm(up), -1.0, 1.0)))
+
+
+def test_the_shipped_model_and_modelnet_and_generated_sources_say_z_is_up(model):
+    np.testing.assert_allclose(model.up_axis, [0.0, 0.0, 1.0])
+    from pcrp_core.sources import load_source
+    assert {o.up for o in load_source("procedural:1")} == {"z"}
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_answers_keep_the_given_up_even_when_it_is_wrong(model, seed):
+    """The prior is obeyed: told the truth the answer is right and upright; told the object is
+    upside down, the answer is upside down too, which it could not be if up were ignored."""
+    rng = np.random.default_rng(seed)
+    R = Rotation.random(random_state=seed).as_matrix()
+    cloud = generate_object(["chair", "sofa", "car"][seed], 100_000 + seed).astype(np.float64) @ R.T + rng.normal(size=3)
+    true_up = R @ model.up_axis
+    right = model.estimate(cloud, up=true_up)
+    assert _tilt(right, model, true_up) < model.up_tolerance_deg
+    assert np.degrees(Rotation.from_matrix(right.rotation @ R.T).magnitude()) < 15.0
+    wrong = model.estimate(cloud, up=-true_up)
+    assert _tilt(wrong, model, -true_up) < model.up_tolerance_deg + 15.0   # final ICP may tip it a little
+    assert _tilt(wrong, model, true_up) > 90.0
+
+
+def test_an_unusable_up_or_a_model_without_an_up_axis_is_refused(model):
+    cloud = generate_object("chair", 7).astype(np.float64)
+    for bad in ([0.0, 0.0, 0.0], [1.0, 2.0], [np.nan, 0.0, 1.0]):
+        with pytest.raises(ValueError, match="up must be"):
+            model.estimate(cloud, up=bad)
+    silent = copy.copy(model)
+    silent.meta = {**model.meta, "up_axis": None}
+    with pytest.raises(ValueError, match="up-axis"):
+        silent.estimate(cloud, up=[0.0, 0.0, 1.0])
+    assert silent.estimate(cloud).gallery_id == model.estimate(cloud).gallery_id
+    with pytest.raises(ValueError):
+        model.set_options(up_tolerance_deg=0.0)
+
+
+def test_a_build_records_the_up_axis_its_sources_agree_on_or_the_one_given(tmp_path):
+    def objects(ups):
+        return [GalleryObject(f"o{k}", "chair", generate_object("chair", k), up=u) for k, u in enumerate(ups)]
+    assert PCRP.build(objects(["z", "z", "z"]), n_jobs=1).up_axis.tolist() == [0.0, 0.0, 1.0]
+    assert PCRP.build(objects(["z", "y", "z"]), n_jobs=1).up_axis is None       # disagree: none
+    assert PCRP.build(objects([None, None, None]), n_jobs=1).up_axis is None     # folders say nothing
+    given = PCRP.build(objects([None, None, None]), n_jobs=1, up_axis="-y")
+    given.save(tmp_path / "m")
+    assert PCRP.load(tmp_path / "m").up_axis.tolist() == [0.0, -1.0, 0.0]
+    meta = json.loads((tmp_path / "m" / "model.json").read_text())
+    meta["up_axis"] = "sideways"
+    (tmp_path / "m" / "model.json").write_text(json.dumps(meta))
+    with pytest.raises(ModelError, match="up axis"):
+        PCRP.load(tmp_path / "m")
