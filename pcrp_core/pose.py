@@ -12,8 +12,10 @@ rotation fits every candidate of the category, while a flip that happens to suit
 instance is outvoted by the others. The final pose averages the candidates that agree and
 fit nearly as well as the best, each refined once more (for whole clouds) with matches taken
 both ways, so that it sits centred on the candidate rather than wherever the query's points
-happen to touch its surface. All of it happens in normalised coordinates, query registered
-onto gallery: g ≈ R @ q + t.
+happen to touch its surface. When the caller knows which way is up, hypotheses that tip the
+gallery's up axis away from it are dropped before any of this (Registrar.upright): the turns
+that near-symmetric shapes are most confused by are upside-down and lying-down ones. All of it
+happens in normalised coordinates, query registered onto gallery: g ≈ R @ q + t.
 """
 from __future__ import annotations
 
