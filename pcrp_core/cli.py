@@ -102,10 +102,7 @@ def _query(args) -> int:
     opts = {k: v for k, v in (("n_candidates", args.candidates), ("min_score", args.min_score),
                               ("up_tolerance_deg", args.up_tolerance)) if v is not None}
     try:
-        up = None if args.up is None else [float(v) for v in args.up.split(",")]
-    except ValueError:
-        return _fail(f"--up {args.up!r}: expected three numbers, e.g. 0,0,1")
-    try:
+        up = parse_up(args.up)
         model.set_options(**opts)
         result = model.estimate(points, up=up)
     except (InvalidCloud, ValueError) as e:
@@ -156,6 +153,19 @@ def _eval(args) -> int:
     path = write(settings, res)
     print(f"wrote {path} ({res['seconds']['total'] / 60:.1f} minutes)")
     return 0
+
+
+def parse_up(text):
+    """--up's X,Y,Z as three floats (None when not given); ValueError saying what is expected."""
+    if text is None:
+        return None
+    try:
+        up = [float(v) for v in text.split(",")]
+    except ValueError:
+        up = []
+    if len(up) != 3:
+        raise ValueError(f"--up {text!r}: expected three numbers, e.g. 0,0,1")
+    return up
 
 
 def _axis_name(v) -> str:

@@ -316,9 +316,9 @@ class PCRP:
         up = self.meta.get("up_axis")
         return None if up is None else np.asarray(up, dtype=np.float64)
 
-    def _up_pair(self, up):
-        if up is None:
-            return None
+    def check_up(self, up) -> np.ndarray:
+        """up as estimate() uses it (a unit vector); ValueError saying why it cannot be used: not
+        a finite non-zero 3-vector, or a model that does not record its objects' up axis."""
         u = np.asarray(up, dtype=np.float64).reshape(-1)
         n = float(np.linalg.norm(u)) if u.shape == (3,) and np.all(np.isfinite(u)) else 0.0
         if n < 1e-9:
@@ -326,7 +326,7 @@ class PCRP:
         if self.up_axis is None:
             raise ValueError("this model does not record its objects' up axis; rebuild it with "
                              "`pcrp build --up-axis` to use an up direction")
-        return u / n, self.up_axis
+        return u / n
 
     def _viewpoint(self, viewpoint, centre):
         return None if viewpoint is None else (np.asarray(viewpoint, dtype=np.float64) - centre) / self.unit
@@ -349,7 +349,7 @@ class PCRP:
         """
         t0 = time.perf_counter()
         timings = {}
-        up_pair = self._up_pair(up)
+        up_pair = None if up is None else (self.check_up(up), self.up_axis)
         pts = self._clean(points)
         centre = pts.mean(0)
         # size: how much the query is scaled before anything is computed on it (1 in metric mode;

@@ -64,9 +64,10 @@ def register_make_bag(sub) -> None:
 
 
 # -- process ----------------------------------------------------------------------------------------
-def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None):
+def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None, up=None):
     """Run the core over every cloud of a bag (or of the given topics); write the node's outputs
-    into `out`; return rows. Unreadable clouds become rows with their reason, never a stop."""
+    into `out`; return rows. Unreadable clouds become rows with their reason, never a stop.
+    up: which way is up in the clouds' frame, as the node's up_vector (None: unknown)."""
     from pcrp_core import InvalidCloud
     from pcrp_ros.bags import BagWriter, cloud_msg, pose_msg, read_bag, T
     from pcrp_ros.conversions import aligned_points
@@ -85,7 +86,7 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
             else:
                 try:
                     t0 = time.perf_counter()
-                    r = model.estimate(c["points"], viewpoint=np.zeros(3) if sensor_at_origin else None)
+                    r = model.estimate(c["points"], viewpoint=np.zeros(3) if sensor_at_origin else None, up=up)
                     row["latency_ms"] = 1e3 * (time.perf_counter() - t0)
                 except InvalidCloud as e:
                     r, row["status"] = None, f"rejected: {e.reason}"
@@ -149,19 +150,26 @@ def register_process(sub) -> None:
     p.add_argument("--complete-objects", action="store_true",
                    help="clouds are complete objects, not one sensor's view from the frame origin")
     p.add_argument("--topics", nargs="*", default=None, help="cloud topics to answer (default: every PointCloud2 topic)")
+    p.add_argument("--up", default=None, metavar="X,Y,Z",
+                   help="which way is up in the clouds' frame, as the node's up_vector (--up=-1,0,0 for a leading minus)")
     p.set_defaults(func=_process)
 
 
 def _process(args) -> int:
     from pcrp_core import ModelError, PCRP
 
+    from pcrp_core.cli import parse_up
+
     try:
         model = PCRP.load(args.model)
-    except ModelError as e:
+        up = parse_up(args.up)
+        if up is not None:
+            model.check_up(up)   # a model without an up axis, or a zero vector: say so before any cloud
+    except (ModelError, ValueError) as e:
         print(f"pcrp: error: {e}", file=sys.stderr)
         return 2
     print(HEADER)
-    rows = process_bag(args.bag, args.out, model, sensor_at_origin=not args.complete_objects, topics=args.topics)
+    rows = process_bag(args.bag, args.out, model, sensor_at_origin=not args.complete_objects, topics=args.topics, up=up)
     print(summary(rows))
     return 0 if rows else 1     # a partial read is reported above; nothing read at all is a failure
 

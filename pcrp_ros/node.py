@@ -112,14 +112,12 @@ class PcrpNode(Node):
     def _checked_up(self, value):
         """up_vector as estimate() takes it (None for [0, 0, 0]); ValueError saying why it cannot be used."""
         v = np.asarray(list(value), dtype=np.float64)
-        if v.shape != (3,) or not np.all(np.isfinite(v)):
-            raise ValueError(f"up_vector must be three finite numbers, not {list(value)!r}")
-        if not v.any():
+        if v.shape == (3,) and not v.any():
             return None
-        if self.model.up_axis is None:
-            raise ValueError("up_vector is set but the model does not record its objects' up axis "
-                             "(rebuild it with `pcrp build --up-axis`)")
-        return v / np.linalg.norm(v)
+        try:
+            return self.model.check_up(v)
+        except ValueError as e:
+            raise ValueError(f"up_vector {list(value)!r}: {e}") from None
 
     def _on_set_parameters(self, params) -> SetParametersResult:
         changes = {p.name: p.value for p in params if p.name in MODEL_OPTIONS}

@@ -57,3 +57,12 @@ def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path
     out = subprocess.run([sys.executable, "-m", "pcrp_ros.cli", "process", str(bag), "--out", str(tmp_path / "none"),
                           "--topics", "no/such/topic"], capture_output=True, text=True, timeout=120)
     assert out.returncode == 1 and "no clouds on the topics asked for: no/such/topic" in out.stderr
+    # an unusable up direction stops process before any cloud, with one line; a usable one is passed on
+    out = subprocess.run([sys.executable, "-m", "pcrp_ros.cli", "process", str(bag), "--out", str(tmp_path / "up0"),
+                          "--up=0,0,0"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and "up must be" in out.stderr and "Traceback" not in out.stderr
+    model, seen = PCRP.load(default_model_path()), []
+    estimate = model.estimate
+    model.estimate = lambda points, **kw: seen.append(kw["up"]) or estimate(points, **kw)
+    process_bag(bag, tmp_path / "up", model, quiet=True, topics=["segmented_object"], up=[0.0, -1.0, 0.0])
+    assert len(seen) == 3 and all(u == [0.0, -1.0, 0.0] for u in seen)
