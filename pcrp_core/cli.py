@@ -170,7 +170,8 @@ def parse_up(text):
 
 def _axis_name(v) -> str:
     import numpy as np
-    for name, axis in (("x", (1, 0, 0)), ("y", (0, 1, 0)), ("z", (0, 0, 1))):
+    from pcrp_core.pipeline import AXES
+    for name, axis in AXES.items():
         for sign in ("", "-"):
             if np.allclose(v, np.array(axis) * (-1 if sign else 1)):
                 return sign + name

@@ -71,6 +71,20 @@ def _common_up(objects) -> np.ndarray | None:
     return np.array(ups.pop()) if len(ups) == 1 and None not in ups else None
 
 
+class _PoseOption:
+    """A runtime option of the model that lives in its pose_options, so set_options (and the
+    node's parameters) set it by name like the model's own."""
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, model, owner=None):
+        return self if model is None else getattr(model.pose_options, self.name)
+
+    def __set__(self, model, value):
+        setattr(model.pose_options, self.name, type(getattr(PoseOptions, self.name))(value))
+
+
 def _rms_radius(points: np.ndarray) -> float:
     return float(np.sqrt(((points - points.mean(0)) ** 2).sum(1).mean()))
 
@@ -104,21 +118,8 @@ class PCRP:
         self._radii = np.array([_rms_radius(c) for c in gallery.clouds]) if len(gallery) else np.zeros(0)
 
     # -- options --------------------------------------------------------------------------------
-    @property
-    def refine(self) -> bool:
-        return self.pose_options.refine
-
-    @refine.setter
-    def refine(self, value: bool) -> None:
-        self.pose_options.refine = bool(value)
-
-    @property
-    def up_tolerance_deg(self) -> float:
-        return self.pose_options.up_tolerance_deg
-
-    @up_tolerance_deg.setter
-    def up_tolerance_deg(self, value: float) -> None:
-        self.pose_options.up_tolerance_deg = float(value)
+    refine = _PoseOption()
+    up_tolerance_deg = _PoseOption()
 
     def set_options(self, **options) -> None:
         """Set runtime options, refusing invalid values with a ValueError that says why."""
