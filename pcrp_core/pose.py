@@ -89,6 +89,7 @@ class PoseOptions:
     # further than this from it are dropped. Wide, since objects lean and rest on their sides too;
     # what it removes are the upside-down and lying-down turns of near-symmetric shapes.
     up_tolerance_deg: float = 60.0
+    upright_turns: int = 12             # turns about the vertical tried when nothing else is upright
 
 
 @dataclass
@@ -169,6 +170,14 @@ def _ransac_seeds(query: Prepared, gallery: Prepared, opts: PoseOptions, rng, cl
             seeds.append((R, t, "ransac"))
         clock.lap("ransac")
     return seeds
+
+
+def _upright_turns(q_up, g_up, n: int) -> np.ndarray:
+    """(n, 3, 3) rotations taking q_up onto g_up, turned by n even steps about g_up."""
+    from scipy.spatial.transform import Rotation
+    stand = Rotation.align_vectors([g_up], [q_up])[0]
+    turns = Rotation.from_rotvec(np.outer(np.arange(n) * 2 * np.pi / n, g_up))
+    return (turns * stand).as_matrix()
 
 
 def _flip(R, t, centre):
@@ -267,6 +276,12 @@ class Registrar:
             best = min(self._keep_upright(hyps), key=lambda h: h.chamfer)
             Rs, ts = zip(*_flip(best.R, best.t, gallery.points.mean(0)))
             hyps += self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, [best.source + "+flip"] * len(Rs))
+        if self.up is not None and not self.upright([h.R for h in hyps]).any():
+            # nothing upright from features or principal axes (a one-sided view's axes need not be
+            # the object's): stand the query up and try it turned every way about the vertical
+            Rs = _upright_turns(*self.up, self.opts.upright_turns)
+            ts = gallery.points.mean(0) - Rs @ self.query.points.mean(0)
+            hyps += self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, ["upright"] * len(Rs))
         self.clock.lap("hypotheses")
         return self._keep_upright(hyps)
 

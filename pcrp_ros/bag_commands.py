@@ -10,6 +10,9 @@ import numpy as np
 
 DEMO_BAG = Path(__file__).resolve().parents[1] / "pcrp_core" / "data" / "demo_bag"
 START_NS = 1_700_000_000 * 10**9   # bags start at a fixed time so they are reproducible
+# a level camera's optical frame (x right, y down, z forward) looking at a z-up object standing upright
+LEVEL_CAMERA = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+UP_IN_LEVEL_CAMERA = [0.0, -1.0, 0.0]
 
 
 def _rotation_error(R_est, R_true) -> float:
@@ -19,18 +22,27 @@ def _rotation_error(R_est, R_true) -> float:
 
 # -- make-bag ---------------------------------------------------------------------------------------
 def make_bag(out, source="procedural:20", split="train", count=30, rate=5.0, topic="segmented_object",
-             seed=0, partial=True, noise=0.003, frame="camera_optical_frame", storage="sqlite3") -> int:
+             seed=0, partial=True, noise=0.003, frame="camera_optical_frame", storage="sqlite3",
+             upright: bool = False) -> int:
+    """upright: objects stand upright, turned about the vertical only, before a level camera
+    (up is UP_IN_LEVEL_CAMERA in its frame); otherwise they are turned every way."""
+    from scipy.spatial.transform import Rotation
     from pcrp_core.sources import load_source
     from pcrp_core.sources.views import random_rotation, sensor_view
     from pcrp_ros.bags import BagWriter, cloud_msg, header, T
 
     objects = load_source(source, split=split)
+    if upright and any(o.up != "z" for o in objects):
+        raise ValueError(f"{source}: --upright needs z-up objects (ModelNet40 archives or the generator)")
     rng = np.random.default_rng(seed)
     order = rng.permutation(len(objects))
     with BagWriter(out, storage) as bag:
         for k in range(count):
             obj = objects[order[k % len(objects)]]
-            R = random_rotation(rng)
+            if upright:
+                R = LEVEL_CAMERA @ Rotation.from_euler("z", rng.uniform(0.0, 2 * np.pi)).as_matrix()
+            else:
+                R = random_rotation(rng)
             # in front of the camera (optical frame: z forward), about three object radii away
             radius = float(np.linalg.norm(obj.points - obj.points.mean(0), axis=1).max())
             t = np.array([rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(2.5, 3.5)]) * radius
@@ -60,7 +72,21 @@ def register_make_bag(sub) -> None:
     p.add_argument("--full", action="store_true", help="complete objects instead of one-sided depth-camera views")
     p.add_argument("--noise", type=float, default=0.003, help="range noise, in object radii (default 0.003)")
     p.add_argument("--storage", default="sqlite3", choices=["sqlite3", "mcap"])
-    p.set_defaults(func=lambda a: print(f"wrote {make_bag(a.out, a.source, a.split, a.count, a.rate, a.topic, a.seed, not a.full, a.noise, a.frame, a.storage)} clouds to {a.out}") or 0)
+    p.add_argument("--upright", action="store_true",
+                   help="objects standing upright, turned about the vertical only, before a level camera "
+                        "(then up is 0,-1,0 in the clouds' frame: the node's up_vector, process --up=0,-1,0)")
+    p.set_defaults(func=_make_bag)
+
+
+def _make_bag(a) -> int:
+    try:
+        n = make_bag(a.out, a.source, a.split, a.count, a.rate, a.topic, a.seed, not a.full, a.noise, a.frame,
+                     a.storage, a.upright)
+    except ValueError as e:
+        print(f"pcrp: error: {e}", file=sys.stderr)
+        return 2
+    print(f"wrote {n} clouds to {a.out}")
+    return 0
 
 
 # -- process ----------------------------------------------------------------------------------------
