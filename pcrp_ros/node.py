@@ -45,8 +45,8 @@ PARAMETERS = {
     "sensor_at_origin": (True, "The cloud's frame is the sensor's own (one-sided views seen from its origin); "
                                "false for complete objects or clouds already in a world frame.", None, False),
     "up_vector": ([0.0, 0.0, 0.0], "Which way is up (against gravity) in the input clouds' frame, if fixed and known: "
-                                   "[0, -1, 0] for a level camera's optical frame. Answers then keep the object "
-                                   "upright within up_tolerance_deg. [0, 0, 0]: unknown, any orientation.", None, False),
+                                   "[0.0, -1.0, 0.0] for a level camera's optical frame. Answers then keep the object "
+                                   "upright within up_tolerance_deg. [0.0, 0.0, 0.0]: unknown, any orientation.", None, False),
     "up_tolerance_deg": (60.0, "How far an answer may tip the object from up_vector.", (1.0, 180.0), False),
     "qos_reliability": ("best_effort", "Input QoS reliability: best_effort (sensor data) or reliable.", None, True),
     "qos_depth": (2, "Input QoS queue depth.", (1, 100), True),
