@@ -19,6 +19,7 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
+from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, HistoryPolicy, qos_profile_sensor_data
@@ -235,7 +236,8 @@ def main(args=None) -> int:
         node = PcrpNode()
         executor.add_node(node)
         executor.spin()
-    except (ModelError, ValueError) as e:
+    except (ModelError, ValueError, ParameterException, NameValidationException) as e:
+        # a broken model or a mistyped parameter or topic in the launch configuration: one line
         print(f"pcrp_node: error: {e}", file=sys.stderr)
         return 1
     except (KeyboardInterrupt, ExternalShutdownException):

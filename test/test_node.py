@@ -228,3 +228,15 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path
             proc.kill()
     rest = proc.stdout.read()
     assert "Traceback" not in rest
+
+
+@pytest.mark.parametrize("override", ["min_points:=3.5", "up_vector:=[0, -1, 0]", "min_points:=2"])
+def test_a_mistyped_or_out_of_range_parameter_stops_the_node_with_one_clear_line(override):
+    import os
+    import subprocess
+    import sys
+    env = {**os.environ, "ROS_DOMAIN_ID": str((int(os.environ["ROS_DOMAIN_ID"]) + 60) % 200 + 1)}
+    out = subprocess.run([sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-p", override],
+                         capture_output=True, text=True, timeout=120, env=env)
+    assert out.returncode == 1 and "pcrp_node: error:" in out.stderr and "Traceback" not in out.stderr, out.stderr
+    assert override.split(":=")[0] in out.stderr
