@@ -133,8 +133,9 @@ def _pca_seeds(q: np.ndarray, g: np.ndarray, src: np.ndarray, tree: cKDTree, kee
     upright: a mask function over rotations; the maps it refuses are not considered."""
     Rs, ts = _pca_rotations(q, g)
     short = np.arange(len(Rs))
-    if upright is not None and upright(Rs).any():
-        short = short[upright(Rs)]
+    keep_map = None if upright is None else upright(Rs)
+    if keep_map is not None and keep_map.any():
+        short = short[keep_map]
     if 0 < prefilter < len(src) and 2 * keep < len(short):
         rough = _mean_distance(src[:: max(1, len(src) // prefilter)], Rs[short], ts[short], tree)
         short = np.sort(short[np.argsort(rough)[: 2 * keep]])
