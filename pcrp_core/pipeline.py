@@ -50,6 +50,13 @@ def _view_directions(n: int) -> np.ndarray:
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
 
+def _unit_vector(v) -> np.ndarray | None:
+    """v scaled to length 1, None unless it is a finite, non-zero 3-vector."""
+    v = np.asarray(v, dtype=np.float64).reshape(-1)
+    n = float(np.linalg.norm(v)) if v.shape == (3,) and np.all(np.isfinite(v)) else 0.0
+    return v / n if n >= 1e-9 else None
+
+
 def _unit_axis(axis) -> np.ndarray:
     """A unit vector from "x", "-z", ... or three numbers; ValueError otherwise."""
     if isinstance(axis, str):
@@ -58,10 +65,10 @@ def _unit_axis(axis) -> np.ndarray:
         if name.lstrip("+-") not in AXES:
             raise ValueError(f"up axis {axis!r}: expected x, y, z, -x, -y or -z")
         return sign * np.array(AXES[name.lstrip("+-")])
-    v = np.asarray(axis, dtype=np.float64).reshape(-1)
-    if v.shape != (3,) or not np.all(np.isfinite(v)) or np.linalg.norm(v) < 1e-9:
+    v = _unit_vector(axis)
+    if v is None:
         raise ValueError(f"up axis {axis!r}: expected a finite, non-zero 3-vector")
-    return v / np.linalg.norm(v)
+    return v
 
 
 def _common_up(objects) -> np.ndarray | None:
@@ -320,14 +327,13 @@ class PCRP:
     def check_up(self, up) -> np.ndarray:
         """up as estimate() uses it (a unit vector); ValueError saying why it cannot be used: not
         a finite non-zero 3-vector, or a model that does not record its objects' up axis."""
-        u = np.asarray(up, dtype=np.float64).reshape(-1)
-        n = float(np.linalg.norm(u)) if u.shape == (3,) and np.all(np.isfinite(u)) else 0.0
-        if n < 1e-9:
+        u = _unit_vector(up)
+        if u is None:
             raise ValueError(f"up must be a finite, non-zero 3-vector, not {up!r}")
         if self.up_axis is None:
             raise ValueError("this model does not record its objects' up axis; rebuild it with "
                              "`pcrp build --up-axis` to use an up direction")
-        return u / n
+        return u
 
     def _viewpoint(self, viewpoint, centre):
         return None if viewpoint is None else (np.asarray(viewpoint, dtype=np.float64) - centre) / self.unit
