@@ -206,6 +206,7 @@ class Registrar:
         self.src = src
         # hypotheses are told apart on fewer points than the final refinement uses
         self.coarse_src = src if len(src) <= opts.coarse_points else src[: opts.coarse_points]
+        self._trees: dict[int, cKDTree] = {}     # of src and coarse_src, keyed by id, built when first needed
 
     def refine(self, R, t, gallery: Prepared, iterations: int, source: str, coarse: bool = True) -> Hypothesis:
         return self.refine_many([R], [t], gallery, iterations, [source], coarse)[0]
@@ -222,29 +223,36 @@ class Registrar:
                                              self.opts.icp_trim, self.opts.icp_tolerance, prev, state=True)
         moved = transform_batch(src, Rs, ts)
         fit, rmse, ch = fit_quality_batch(moved, gallery.tree, self.opts.inlier_distance)
-        hyps = []
-        for n, source in enumerate(sources):
-            R, t, c = Rs[n], ts[n], float(ch[n])
-            if self.viewpoint is not None and self.opts.visibility_weight > 0:
-                c = c + self.opts.visibility_weight * self._unexplained(moved[n], R @ self.viewpoint + t, gallery)
-            elif self.opts.reverse_weight > 0:
-                # the gallery object's points near the query too: absent parts count against a pose
-                back = cKDTree(moved[n]).query(gallery.points[:: max(1, len(gallery.points) // len(src))])[0]
-                k = max(1, int(self.opts.reverse_trim * len(back)))
-                c = c + self.opts.reverse_weight * float(np.mean(np.partition(back, k - 1)[:k]))
-            hyps.append(Hypothesis(R, t, float(fit[n]), float(rmse[n]), c, source, float(prev[n]), bool(moving[n])))
-        return hyps
+        ch = ch.astype(np.float64)
+        if self.viewpoint is not None and self.opts.visibility_weight > 0:
+            ch += self.opts.visibility_weight * np.array([self._unexplained(src, R, t, gallery) for R, t in zip(Rs, ts)])
+        elif self.opts.reverse_weight > 0 and len(Rs):
+            # the gallery object's points near the query too: absent parts count against a pose
+            back = self._to_query(src, gallery.points[:: max(1, len(gallery.points) // len(src))], Rs, ts)
+            k = max(1, int(self.opts.reverse_trim * back.shape[1]))
+            ch += self.opts.reverse_weight * np.partition(back, k - 1, axis=1)[:, :k].mean(axis=1)
+        return [Hypothesis(Rs[n], ts[n], float(fit[n]), float(rmse[n]), float(ch[n]), source, float(prev[n]),
+                           bool(moving[n])) for n, source in enumerate(sources)]
 
-    def _unexplained(self, moved, camera, gallery: Prepared) -> float:
+    def _to_query(self, src: np.ndarray, points: np.ndarray, Rs, ts) -> np.ndarray:
+        """(H, m) distance from each of the m gallery points to src posed by each (R, t). The
+        gallery points are taken back into the query's frame instead of the query moved into
+        the gallery's: one tree of src serves every pose (a rigid motion keeps distances)."""
+        if id(src) not in self._trees:
+            self._trees[id(src)] = cKDTree(src)
+        local = np.einsum("hmj,hji->hmi", points[None] - np.asarray(ts)[:, None, :], np.asarray(Rs))
+        return self._trees[id(src)].query(local.reshape(-1, 3))[0].reshape(len(local), -1)
+
+    def _unexplained(self, src, R, t, gallery: Prepared) -> float:
         """Trimmed mean distance from the gallery points the sensor would see under this pose
         to the query. A one-sided view only says what is there, not what is missing; seen
         from the sensor, the posed gallery object must show what the query shows, which is
         what tells a sofa seen from the front from one seen from behind."""
         g = gallery.points[:: max(1, len(gallery.points) // 256)]
-        vis = g[visible_from(g, camera)]
+        vis = g[visible_from(g, R @ self.viewpoint + t)]
         if len(vis) == 0:
             return 1.0
-        d = cKDTree(moved).query(vis)[0]
+        d = self._to_query(src, vis, [R], [t])[0]
         k = max(1, int(0.8 * len(d)))
         return float(np.mean(np.partition(d, k - 1)[:k]))
 
@@ -302,7 +310,8 @@ class Registrar:
         lacks the far side that the gallery-to-query matches would look for."""
         return icp_symmetric(self.src, gallery.points, gallery.tree, hyp.R, hyp.t,
                              self.opts.symmetric_iterations, self.opts.icp_trim,
-                             reverse_trim=self.opts.symmetric_reverse_trim, dense_src=self.query.points)
+                             reverse_trim=self.opts.symmetric_reverse_trim, dense_src=self.query.points,
+                             dense_tree=self.query.tree)
 
     def best_pose(self, matched: list[Prepared], verifiers: list[Prepared], groups=None) -> tuple[int, Hypothesis]:
         """(index into verifiers of the best-fitting object, its refined hypothesis).

@@ -74,7 +74,8 @@ def icp_batch(src: np.ndarray, dst: np.ndarray, dst_tree: cKDTree, R: np.ndarray
 
 def icp_symmetric(src: np.ndarray, dst: np.ndarray, dst_tree: cKDTree, R: np.ndarray, t: np.ndarray,
                   iterations: int = 20, trim: float = 0.8, tolerance: float = 1e-7, reverse_points: int = 256,
-                  reverse_trim: float | None = None, dense_src: np.ndarray | None = None):
+                  reverse_trim: float | None = None, dense_src: np.ndarray | None = None,
+                  dense_tree: cKDTree | None = None):
     """icp() with matches taken both ways: each query point to its nearest gallery point and each
     gallery point to its nearest posed query point, trimmed separately, solved together.
 
@@ -85,16 +86,19 @@ def icp_symmetric(src: np.ndarray, dst: np.ndarray, dst_tree: cKDTree, R: np.nda
 
     dense_src: all of the query's points, for the gallery's matches: a point's nearest neighbour
     among a few hundred query points lies off the surface by about their spacing, in a direction
-    that is the same for neighbouring gallery points, which biases the pose of even the very object."""
+    that is the same for neighbouring gallery points, which biases the pose of even the very object.
+    dense_tree: its tree, when the caller has one. The gallery's points are taken back into the
+    query's frame for their matches, so that one tree serves every iteration."""
     dense = src if dense_src is None else dense_src
     g = dst[:: max(1, len(dst) // reverse_points)]
     reverse_trim = trim if reverse_trim is None else reverse_trim
     keep_q, keep_g = max(3, int(trim * len(src))), max(3, int(reverse_trim * len(g)))
+    dense_tree = cKDTree(dense) if dense_tree is None else dense_tree
     prev = np.inf
     for _ in range(iterations):
         moved = src @ R.T + t
         d_q, nn_q = dst_tree.query(moved)
-        d_g, nn_g = cKDTree(dense @ R.T + t).query(g)
+        d_g, nn_g = dense_tree.query((g - t) @ R)
         o_q = np.argpartition(d_q, keep_q - 1)[:keep_q]
         o_g = np.argpartition(d_g, keep_g - 1)[:keep_g]
         R, t = procrustes(np.vstack([src[o_q], dense[nn_g[o_g]]]), np.vstack([dst[nn_q[o_q]], g[o_g]]))
