@@ -4,10 +4,22 @@ from __future__ import annotations
 import numpy as np
 import open3d as o3d
 
+# Hidden point removal flips points about a sphere of this many diameters around the camera, and
+# is only valid while the sphere holds the whole cloud (Katz et al.); a camera further than
+# FAR_DIAMETERS away is moved in along its line of sight to that distance, where the view is
+# already as good as orthographic, so the same points are seen.
+RADIUS_DIAMETERS = 100.0
+FAR_DIAMETERS = 20.0
+
 
 def visible_from(points: np.ndarray, camera: np.ndarray) -> np.ndarray:
     """Indices of the points visible from `camera`."""
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     diameter = np.linalg.norm(points.max(0) - points.min(0))
-    _, idx = pcd.hidden_point_removal(np.asarray(camera, dtype=np.float64), diameter * 100)
+    camera = np.asarray(camera, dtype=np.float64)
+    centre = points.mean(0)
+    dist = float(np.linalg.norm(camera - centre))
+    if dist > FAR_DIAMETERS * diameter:
+        camera = centre + (camera - centre) * (FAR_DIAMETERS * diameter / dist)
+    _, idx = pcd.hidden_point_removal(camera, diameter * RADIUS_DIAMETERS)
     return np.asarray(idx)

@@ -8,6 +8,7 @@ from helpers import MODELNET
 from pcrp_core.sources import load_source, load_sources
 from pcrp_core.sources.procedural import CATEGORIES, generate_object
 from pcrp_core.sources.views import crop_half_plane, partial_view, random_rotation, sensor_view
+from pcrp_core.visibility import visible_from
 
 
 @pytest.mark.parametrize("category", CATEGORIES)
@@ -51,6 +52,18 @@ def test_folders_of_meshes_and_clouds_load_and_broken_files_are_skipped(tmp_path
     assert "broken.ply" in caplog.text
     with pytest.raises(ValueError, match="not a ModelNet40 archive"):
         load_source(str(tmp_path / "nothing_here"))
+
+
+@pytest.mark.parametrize("distance", [1.5, 20.0, 1000.0])
+def test_a_camera_at_any_distance_sees_the_side_facing_it(distance):
+    # hidden point removal breaks once the camera is further than its flipping sphere's radius:
+    # from 1000 diameters it used to report the far side
+    rng = np.random.default_rng(0)
+    p = rng.normal(size=(2000, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    seen = p[visible_from(p, np.array([0.0, 0.0, 2.0 * distance]))]
+    assert 0.3 * len(p) < len(seen) < 0.6 * len(p)
+    assert np.mean(seen[:, 2] > 0) > 0.9
 
 
 def test_a_sensor_sees_one_side_with_noise_along_its_rays():
