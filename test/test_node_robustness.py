@@ -95,32 +95,35 @@ def test_publishers_that_come_and_go_and_reliable_ones_are_all_answered(model):
 def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
     import rclpy
     g = good_cloud(model)
+    # a topic of its own: the bad-cloud runner above keeps a node on /segmented_object for the
+    # whole module, and a copy of the cloud it happens to receive would be a third answer
+    topic = "second_instance_object"
+    only = [Parameter("input_topics", value=[topic])]
     with ros_context() as ctx:
-        first = PcrpNode(model=model, context=ctx)
-        second = PcrpNode(model=PCRP.load(default_model_path()), node_name="pcrp_node_2", context=ctx)
+        first = PcrpNode(model=model, context=ctx, parameter_overrides=only)
+        second = PcrpNode(model=PCRP.load(default_model_path()), node_name="pcrp_node_2", context=ctx,
+                          parameter_overrides=only)
         client = rclpy.create_node("client", context=ctx)
         poses, names = [], set()
-        client.create_subscription(PoseStamped, "/segmented_object/pose", poses.append, 10)
+        client.create_subscription(PoseStamped, f"/{topic}/pose", poses.append, 10)
         client.create_subscription(DiagnosticArray, "/diagnostics",
                                    lambda a: names.update(s.name for s in a.status), 10)
-        pub = client.create_publisher(PointCloud2, "/segmented_object", QoSProfile(depth=2))
+        pub = client.create_publisher(PointCloud2, f"/{topic}", QoSProfile(depth=2))
         with spinning(ctx, first, second, client):
-            # at least: an endpoint of the previous test's node may linger until its lease runs
-            # out when its goodbye was lost; the answers below are what tells the two apart
             assert wait_for(lambda: pub.get_subscription_count() >= 2, 30), \
-                [i.node_name for i in client.get_subscriptions_info_by_topic("/segmented_object")]
-            answered = lambda n: n.stats["segmented_object"].counts["answered"]  # noqa: E731
+                [i.node_name for i in client.get_subscriptions_info_by_topic(f"/{topic}")]
+            answered = lambda n: n.stats[topic].counts["answered"]  # noqa: E731
             assert publish_until(pub, xyz_to_pointcloud2(g.points, _header(7)),
                                  lambda: answered(first) and answered(second) and len(poses) >= 2)
-            assert wait_for(lambda: {"pcrp_node: segmented_object", "pcrp_node_2: segmented_object"} <= names, 5)
+            assert wait_for(lambda: {f"pcrp_node: {topic}", f"pcrp_node_2: {topic}"} <= names, 5)
             # each node works in a thread of its own: a cloud received while it was busy may still
             # be waiting in its slot, so wait until every received cloud is decided and its pose is in
-            decided = lambda n: sum(n.stats["segmented_object"].counts[k]  # noqa: E731
+            decided = lambda n: sum(n.stats[topic].counts[k]  # noqa: E731
                                     for k in ("answered", "rejected", "dropped_stale"))
-            assert wait_for(lambda: all(decided(n) == n.stats["segmented_object"].counts["received"]
+            assert wait_for(lambda: all(decided(n) == n.stats[topic].counts["received"]
                                         for n in (first, second))
                             and len(poses) == answered(first) + answered(second), 60), \
-                ([dict(n.stats["segmented_object"].counts) for n in (first, second)], len(poses))
+                ([dict(n.stats[topic].counts) for n in (first, second)], len(poses))
         # one answer per instance per cloud received, all with the cloud's header and the same pose
         assert len(poses) == answered(first) + answered(second)
         assert all(p.header == poses[0].header for p in poses)
