@@ -64,6 +64,9 @@ class PoseOptions:
     consensus: bool = True
     consensus_weight: float = 0.5
     exact_ratio: float = 0.8            # a candidate fitting this much better than all others is the object
+    # the same for clouds from a sensor (viewpoint given), stricter: a partial cloud can fit a
+    # wrong turn of one relative closely, where whole clouds cannot
+    exact_ratio_view: float = 0.65
     seeders: int = 0                    # top candidates that seed hypotheses (0: all; at least those matched)
     pool_size: int = 6
     # whole clouds only (no viewpoint): the gallery object's points far from the posed query count
@@ -346,13 +349,13 @@ class Registrar:
         # the best fit decides when one candidate is the very object; the median over
         # candidates decides between near-symmetric flips that one instance happens to suit
         k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch[:, voters], axis=1)))
-        # ...unless one candidate explains a whole object far better than every other: then it is
-        # the very object (a gallery of known objects), and relatives turned otherwise must not
-        # outvote it. Not for one-sided views: a partial cloud fits some wrong pose of one candidate
-        # closely often enough that only the consensus tells the flips apart.
+        # ...unless one candidate explains the cloud far better than every other: then it is the
+        # very object (a gallery of known objects), and relatives turned otherwise must not outvote
+        # it. Stricter for clouds from a sensor: a partial cloud fits some wrong pose of one
+        # candidate closely often enough that only a wide margin, or else the consensus, decides.
         per_candidate = np.sort(ch.min(axis=0))
-        if (self.viewpoint is None and len(per_candidate) > 1
-                and per_candidate[0] < self.opts.exact_ratio * per_candidate[1]):
+        exact = self.opts.exact_ratio if self.viewpoint is None else self.opts.exact_ratio_view
+        if len(per_candidate) > 1 and per_candidate[0] < exact * per_candidate[1]:
             k = int(np.argmin(ch.min(axis=1)))
         best = pool[k]
         self.clock.lap("verification")
