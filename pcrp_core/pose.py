@@ -209,7 +209,9 @@ class Registrar:
         self.src = src
         # hypotheses are told apart on fewer points than the final refinement uses
         self.coarse_src = src if len(src) <= opts.coarse_points else src[: opts.coarse_points]
-        self._trees: dict[int, cKDTree] = {}     # of src and coarse_src, keyed by id, built when first needed
+        # the gallery's points are taken back into the query's frame to be matched (see _to_query)
+        self.tree = cKDTree(src)
+        self.coarse_tree = self.tree if self.coarse_src is src else cKDTree(self.coarse_src)
 
     def refine(self, R, t, gallery: Prepared, iterations: int, source: str, coarse: bool = True) -> Hypothesis:
         return self.refine_many([R], [t], gallery, iterations, [source], coarse)[0]
@@ -218,7 +220,7 @@ class Registrar:
                     prev=None) -> list[Hypothesis]:
         """refine() of several poses on one gallery object, sharing its tree queries; prev
         resumes ICP runs that stopped at those poses (see icp_batch)."""
-        src = self.coarse_src if coarse else self.src
+        src, tree = (self.coarse_src, self.coarse_tree) if coarse else (self.src, self.tree)
         Rs, ts = np.asarray(Rs, dtype=np.float64), np.asarray(ts, dtype=np.float64)
         prev, moving = (np.full(len(Rs), np.inf) if prev is None else prev), np.ones(len(Rs), bool)
         if self.opts.refine and iterations > 0:
@@ -226,27 +228,17 @@ class Registrar:
                                              self.opts.icp_trim, self.opts.icp_tolerance, prev, state=True)
         moved = transform_batch(src, Rs, ts)
         fit, rmse, ch = fit_quality_batch(moved, gallery.tree, self.opts.inlier_distance)
-        ch = ch.astype(np.float64)
         if self.viewpoint is not None and self.opts.visibility_weight > 0:
-            ch += self.opts.visibility_weight * np.array([self._unexplained(src, R, t, gallery) for R, t in zip(Rs, ts)])
+            ch += self.opts.visibility_weight * np.array([self._unexplained(tree, R, t, gallery) for R, t in zip(Rs, ts)])
         elif self.opts.reverse_weight > 0 and len(Rs):
             # the gallery object's points near the query too: absent parts count against a pose
-            back = self._to_query(src, gallery.points[:: max(1, len(gallery.points) // len(src))], Rs, ts)
+            back = _to_query(tree, gallery.points[:: max(1, len(gallery.points) // len(src))], Rs, ts)
             k = max(1, int(self.opts.reverse_trim * back.shape[1]))
             ch += self.opts.reverse_weight * np.partition(back, k - 1, axis=1)[:, :k].mean(axis=1)
         return [Hypothesis(Rs[n], ts[n], float(fit[n]), float(rmse[n]), float(ch[n]), source, float(prev[n]),
                            bool(moving[n])) for n, source in enumerate(sources)]
 
-    def _to_query(self, src: np.ndarray, points: np.ndarray, Rs, ts) -> np.ndarray:
-        """(H, m) distance from each of the m gallery points to src posed by each (R, t). The
-        gallery points are taken back into the query's frame instead of the query moved into
-        the gallery's: one tree of src serves every pose (a rigid motion keeps distances)."""
-        if id(src) not in self._trees:
-            self._trees[id(src)] = cKDTree(src)
-        local = np.einsum("hmj,hji->hmi", points[None] - np.asarray(ts)[:, None, :], np.asarray(Rs))
-        return self._trees[id(src)].query(local.reshape(-1, 3))[0].reshape(len(local), -1)
-
-    def _unexplained(self, src, R, t, gallery: Prepared) -> float:
+    def _unexplained(self, tree: cKDTree, R, t, gallery: Prepared) -> float:
         """Trimmed mean distance from the gallery points the sensor would see under this pose
         to the query. A one-sided view only says what is there, not what is missing; seen
         from the sensor, the posed gallery object must show what the query shows, which is
@@ -255,7 +247,7 @@ class Registrar:
         vis = g[visible_from(g, R @ self.viewpoint + t)]
         if len(vis) == 0:
             return 1.0
-        d = self._to_query(src, vis, [R], [t])[0]
+        d = _to_query(tree, vis, [R], [t])[0]
         k = max(1, int(0.8 * len(d)))
         return float(np.mean(np.partition(d, k - 1)[:k]))
 
@@ -371,6 +363,15 @@ class Registrar:
         final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
         self.clock.lap("refinement")
         return j, final
+
+
+def _to_query(tree: cKDTree, points: np.ndarray, Rs, ts) -> np.ndarray:
+    """(H, m) distance from each of the m gallery points to the query points in `tree` posed by
+    each (R, t). The gallery points are taken back into the query's frame instead of the query
+    moved into the gallery's: one tree of the query serves every pose (a rigid motion keeps
+    distances)."""
+    local = np.einsum("hmj,hji->hmi", points[None] - np.asarray(ts)[:, None, :], np.asarray(Rs))
+    return tree.query(local.reshape(-1, 3))[0].reshape(len(local), -1)
 
 
 def _resumed(vote: Hypothesis, source: str) -> Hypothesis:
