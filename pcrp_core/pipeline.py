@@ -27,6 +27,7 @@ from pcrp_core.gallery import Gallery
 from pcrp_core.pose import PoseOptions, Prepared, Registrar, prepare
 from pcrp_core.preprocess import check_geometry, downsample, finite_points
 from pcrp_core.result import PoseResult
+from pcrp_core.visibility import sphere_directions
 from pcrp_core.vlad import VLAD
 
 DEFAULT_MODEL = Path(__file__).parent / "data" / "default_model"
@@ -36,15 +37,6 @@ SCALE_MODES = ("metric", "normalize")
 def default_model_path() -> Path:
     """The small model shipped with the package, built from the procedural generator."""
     return DEFAULT_MODEL
-
-
-def _view_directions(n: int) -> np.ndarray:
-    """n unit vectors spread evenly over the sphere (Fibonacci lattice)."""
-    k = np.arange(n) + 0.5
-    z = 1 - 2 * k / n
-    phi = np.pi * (1 + 5 ** 0.5) * k
-    r = np.sqrt(1 - z ** 2)
-    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
 
 
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
@@ -223,7 +215,7 @@ class PCRP:
         vectors = [vlad.transform(f) for f in feats]
         owners = list(range(len(objects)))
         if views:
-            cameras = _view_directions(views) * 3.0
+            cameras = sphere_directions(views) * 3.0
             per_object = parallel_map(view_vectors, [(c, cameras) for c in normed],
                                       {"pointhop": pointhop, "vlad": vlad}, n_jobs, progress, "views")
             for i, vs in enumerate(per_object):

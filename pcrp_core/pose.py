@@ -1,9 +1,10 @@
 """Pose of a query relative to the retrieved gallery objects: hypotheses, refinement, verification.
 
-Hypotheses come from the paper's method (feature matches within symmetry halves, both
-pairings of the halves, Procrustes in RANSAC) on the first retrieved objects and, beyond it,
-from principal axes and from the half turns about the canonical axes of each hypothesis: the
-turns that near-symmetric objects (a car's front and back) are confused by.
+Hypotheses (hypotheses.py) come from the paper's method (feature matches within symmetry
+halves, Procrustes in RANSAC) on the first retrieved objects and, beyond it, from principal
+axes, from the half turns about the canonical axes of each hypothesis (the turns that
+near-symmetric objects, a car's front and back, are confused by) and, for clouds from a
+sensor, from the directions the object could have been seen from.
 
 Verification goes past the paper: every surviving hypothesis is refined by ICP against each
 of the top retrieved objects, and the rotation that sits best on all of them together wins.
@@ -24,15 +25,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from pcrp_core.registration import fit_quality_batch, icp_batch, icp_symmetric, ransac
+from pcrp_core import hypotheses
+from pcrp_core.registration import fit_quality_batch, icp_batch, icp_symmetric
 from pcrp_core.registration.icp import transform_batch
-from pcrp_core.registration.correspondences import matches_within_halves
-from pcrp_core.symmetry import principal_axes, split_halves
+from pcrp_core.registration.scoring import distances_back
+from pcrp_core.symmetry import split_halves
 from pcrp_core.timing import Clock
 from pcrp_core.visibility import visible_from
-
-FLIPS = np.array([np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0])])
-
 
 @dataclass
 class Prepared:
@@ -93,6 +92,14 @@ class PoseOptions:
     # what it removes are the upside-down and lying-down turns of near-symmetric shapes.
     up_tolerance_deg: float = 60.0
     upright_turns: int = 12             # turns about the vertical tried when nothing else is upright
+    # clouds from a sensor: the first view_seeders candidates also get the view_keep best of
+    # view_directions x view_rolls poses placing the sensor around them (hypotheses.view_seeds),
+    # ranked on view_prefilter points. Few candidates suffice: a right pose of one is checked on all.
+    view_seeders: int = 4
+    view_directions: int = 20
+    view_rolls: int = 12
+    view_keep: int = 2
+    view_prefilter: int = 32
 
 
 @dataclass
@@ -106,88 +113,6 @@ class Hypothesis:
     # where ICP stopped: its last mean squared error and whether it was still improving
     icp_prev: float = np.inf
     icp_moving: bool = True
-
-
-def _proper_signed_permutations() -> np.ndarray:
-    """The 24 rotations that map coordinate axes onto coordinate axes."""
-    import itertools
-    mats = []
-    for perm in itertools.permutations(range(3)):
-        for signs in itertools.product((1.0, -1.0), repeat=3):
-            M = np.zeros((3, 3))
-            M[range(3), perm] = signs
-            if np.linalg.det(M) > 0:
-                mats.append(M)
-    return np.array(mats)
-
-
-AXIS_ROTATIONS = _proper_signed_permutations()
-
-
-def _pca_seeds(q: np.ndarray, g: np.ndarray, src: np.ndarray, tree: cKDTree, keep: int, prefilter: int = 0,
-               upright=None):
-    """Rotations taking the query's principal axes onto the gallery's under each of the 24
-    axis-to-axis maps (two instances of a category need not order their axes alike), the
-    `keep` that fit best before any refinement: right for complete objects, a cheap extra
-    guess for partial ones.
-
-    prefilter > 0: rank all 24 on that many of the points first and score only the best
-    2 * keep on all of them; most axis maps are grossly wrong, and a few points say so.
-    upright: a mask function over rotations; the maps it refuses are not considered."""
-    Rs, ts = _pca_rotations(q, g)
-    short = np.arange(len(Rs))
-    keep_map = None if upright is None else upright(Rs)
-    if keep_map is not None and keep_map.any():
-        short = short[keep_map]
-    if 0 < prefilter < len(src) and 2 * keep < len(short):
-        rough = _mean_distance(src[:: max(1, len(src) // prefilter)], Rs[short], ts[short], tree)
-        short = np.sort(short[np.argsort(rough)[: 2 * keep]])
-    cost = _mean_distance(src, Rs[short], ts[short], tree)
-    for n in short[np.argsort(cost)[:keep]]:
-        yield Rs[n], ts[n], "pca"
-
-
-def _pca_rotations(q, g):
-    aq, ag = principal_axes(q), principal_axes(g)
-    Rs = np.einsum("ji,njk,kl->nil", ag, AXIS_ROTATIONS, aq)    # ag.T @ M @ aq
-    return Rs, g.mean(0) - Rs @ q.mean(0)
-
-
-def _mean_distance(src, Rs, ts, tree):
-    """(H,) mean distance from src under each pose to the gallery."""
-    d, _ = tree.query(transform_batch(src, Rs, ts).reshape(-1, 3))
-    return d.reshape(len(Rs), -1).mean(1)
-
-
-def _ransac_seeds(query: Prepared, gallery: Prepared, opts: PoseOptions, rng, clock: Clock):
-    if opts.symmetry_split:
-        settings = [(query.halves, gallery.halves, True), (query.halves, gallery.halves, False)]
-    else:
-        settings = [(np.ones(len(query.sampled), bool), np.ones(len(gallery.sampled), bool), True)]
-    seeds = []
-    for qh, gh, same in settings:
-        qi, gi, _ = matches_within_halves(query.features, gallery.features, qh, gh, same)
-        clock.lap("correspondences")
-        if len(qi) >= 3:
-            R, t, _ = ransac(query.sampled[qi], gallery.sampled[gi], opts.ransac_threshold,
-                             opts.ransac_iterations, rng)
-            seeds.append((R, t, "ransac"))
-        clock.lap("ransac")
-    return seeds
-
-
-def _upright_turns(q_up, g_up, n: int) -> np.ndarray:
-    """(n, 3, 3) rotations taking q_up onto g_up, turned by n even steps about g_up."""
-    from scipy.spatial.transform import Rotation
-    stand = Rotation.align_vectors([g_up], [q_up])[0]
-    turns = Rotation.from_rotvec(np.outer(np.arange(n) * 2 * np.pi / n, g_up))
-    return (turns * stand).as_matrix()
-
-
-def _flip(R, t, centre):
-    """The three half turns about canonical axes through the gallery centroid."""
-    for F in FLIPS:
-        yield F @ R, F @ (t - centre) + centre
 
 
 class Registrar:
@@ -212,6 +137,7 @@ class Registrar:
         # the gallery's points are taken back into the query's frame to be matched (see _to_query)
         self.tree = cKDTree(src)
         self.coarse_tree = self.tree if self.coarse_src is src else cKDTree(self.coarse_src)
+        self._view_seeded = 0     # candidates that have had view hypotheses (see seeds)
 
     def refine(self, R, t, gallery: Prepared, iterations: int, source: str, coarse: bool = True) -> Hypothesis:
         return self.refine_many([R], [t], gallery, iterations, [source], coarse)[0]
@@ -232,7 +158,7 @@ class Registrar:
             ch += self.opts.visibility_weight * np.array([self._unexplained(tree, R, t, gallery) for R, t in zip(Rs, ts)])
         elif self.opts.reverse_weight > 0 and len(Rs):
             # the gallery object's points near the query too: absent parts count against a pose
-            back = _to_query(tree, gallery.points[:: max(1, len(gallery.points) // len(src))], Rs, ts)
+            back = distances_back(tree, gallery.points[:: max(1, len(gallery.points) // len(src))], Rs, ts)
             k = max(1, int(self.opts.reverse_trim * back.shape[1]))
             ch += self.opts.reverse_weight * np.partition(back, k - 1, axis=1)[:, :k].mean(axis=1)
         return [Hypothesis(Rs[n], ts[n], float(fit[n]), float(rmse[n]), float(ch[n]), source, float(prev[n]),
@@ -247,7 +173,7 @@ class Registrar:
         vis = g[visible_from(g, R @ self.viewpoint + t)]
         if len(vis) == 0:
             return 1.0
-        d = _to_query(tree, vis, [R], [t])[0]
+        d = distances_back(tree, vis, [R], [t])[0]
         k = max(1, int(0.8 * len(d)))
         return float(np.mean(np.partition(d, k - 1)[:k]))
 
@@ -269,21 +195,26 @@ class Registrar:
     def seeds(self, gallery: Prepared):
         """Coarsely refined hypotheses for one feature-bearing gallery object."""
         self.clock.lap("hypotheses")
-        seeds = _ransac_seeds(self.query, gallery, self.opts, self.rng, self.clock) if gallery.features is not None else []
-        if self.opts.pca_hypotheses or not seeds:
-            seeds += list(_pca_seeds(self.query.points, gallery.points, self.coarse_src, gallery.tree,
-                                     self.opts.pca_seeds, self.opts.pca_prefilter,
-                                     None if self.up is None else self.upright))
+        opts, upright = self.opts, None if self.up is None else self.upright
+        seeds = hypotheses.ransac_seeds(self.query, gallery, opts, self.rng, self.clock) if gallery.features is not None else []
+        if self.viewpoint is not None and self._view_seeded < opts.view_seeders:
+            self._view_seeded += 1
+            seeds += hypotheses.view_seeds(self.query.points, self.viewpoint, gallery.points, gallery.tree,
+                                           self.coarse_src, self.coarse_tree, opts.view_directions, opts.view_rolls,
+                                           opts.view_keep, opts.view_prefilter, upright)
+        if opts.pca_hypotheses or not seeds:
+            seeds += hypotheses.pca_seeds(self.query.points, gallery.points, self.coarse_src, gallery.tree,
+                                          opts.pca_seeds, opts.pca_prefilter, upright)
         Rs, ts, sources = zip(*seeds)
         hyps = self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, sources)
         if self.opts.flips:
             best = min(self._keep_upright(hyps), key=lambda h: h.chamfer)
-            Rs, ts = zip(*_flip(best.R, best.t, gallery.points.mean(0)))
+            Rs, ts = zip(*hypotheses.flips(best.R, best.t, gallery.points.mean(0)))
             hyps += self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, [best.source + "+flip"] * len(Rs))
         if self.up is not None and not self.upright([h.R for h in hyps]).any():
             # nothing upright from features or principal axes (a one-sided view's axes need not be
             # the object's): stand the query up and try it turned every way about the vertical
-            Rs = _upright_turns(*self.up, self.opts.upright_turns)
+            Rs = hypotheses.upright_turns(*self.up, self.opts.upright_turns)
             ts = gallery.points.mean(0) - Rs @ self.query.points.mean(0)
             hyps += self.refine_many(Rs, ts, gallery, self.opts.coarse_icp_iterations, ["upright"] * len(Rs))
         self.clock.lap("hypotheses")
@@ -363,15 +294,6 @@ class Registrar:
         final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
         self.clock.lap("refinement")
         return j, final
-
-
-def _to_query(tree: cKDTree, points: np.ndarray, Rs, ts) -> np.ndarray:
-    """(H, m) distance from each of the m gallery points to the query points in `tree` posed by
-    each (R, t). The gallery points are taken back into the query's frame instead of the query
-    moved into the gallery's: one tree of the query serves every pose (a rigid motion keeps
-    distances)."""
-    local = np.einsum("hmj,hji->hmi", points[None] - np.asarray(ts)[:, None, :], np.asarray(Rs))
-    return tree.query(local.reshape(-1, 3))[0].reshape(len(local), -1)
 
 
 def _resumed(vote: Hypothesis, source: str) -> Hypothesis:

@@ -23,3 +23,13 @@ def visible_from(points: np.ndarray, camera: np.ndarray) -> np.ndarray:
         camera = centre + (camera - centre) * (FAR_DIAMETERS * diameter / dist)
     _, idx = pcd.hidden_point_removal(camera, diameter * RADIUS_DIAMETERS)
     return np.asarray(idx)
+
+
+def sphere_directions(n: int) -> np.ndarray:
+    """n unit vectors spread evenly over the sphere (Fibonacci lattice): where to put sensors
+    around an object, or where one may have stood."""
+    k = np.arange(n) + 0.5
+    z = 1 - 2 * k / n
+    phi = np.pi * (1 + 5 ** 0.5) * k
+    r = np.sqrt(1 - z ** 2)
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])

@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 
 from pcrp_core.evaluation.metrics import geodesic_deg
 from pcrp_core.evaluation.protocol import load_split
-from pcrp_core.pose import AXIS_ROTATIONS
+from pcrp_core.hypotheses import AXIS_ROTATIONS
 
 POINTS = 128                    # per cloud: enough to tell a quarter or half turn of an object apart
 IDENTITY = int(np.flatnonzero([np.allclose(M, np.eye(3)) for M in AXIS_ROTATIONS])[0])

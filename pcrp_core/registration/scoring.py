@@ -4,6 +4,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from pcrp_core.registration.icp import transform_batch
+
 
 def fit_quality(aligned: np.ndarray, dst_tree: cKDTree, inlier_distance: float, trim: float = 0.9):
     """(fitness, inlier_rmse, trimmed_chamfer) of query points already moved into the gallery frame.
@@ -31,3 +33,19 @@ def fit_quality_batch(aligned: np.ndarray, dst_tree: cKDTree, inlier_distance: f
     k = max(1, int(trim * dist.shape[1]))
     chamfer = np.partition(dist, k - 1, axis=1)[:, :k].mean(axis=1)
     return fitness, rmse, chamfer
+
+
+def mean_distance_batch(src: np.ndarray, Rs, ts, dst_tree: cKDTree) -> np.ndarray:
+    """(H,) untrimmed mean distance from src under each pose (R, t) to the points in dst_tree:
+    the cheap ranking of many rough hypotheses, before any is refined."""
+    moved = transform_batch(src, np.asarray(Rs), np.asarray(ts))
+    return dst_tree.query(moved.reshape(-1, 3))[0].reshape(len(moved), -1).mean(axis=1)
+
+
+def distances_back(src_tree: cKDTree, points: np.ndarray, Rs, ts) -> np.ndarray:
+    """(H, m) distance from each of the m gallery points to the query points in src_tree posed
+    by each (R, t), query to gallery. The gallery points are taken back into the query's frame
+    instead of the query moved into the gallery's: one tree of the query serves every pose (a
+    rigid motion keeps distances)."""
+    local = np.einsum("hmj,hji->hmi", points[None] - np.asarray(ts)[:, None, :], np.asarray(Rs))
+    return src_tree.query(local.reshape(-1, 3))[0].reshape(len(local), -1)
