@@ -117,3 +117,23 @@ def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
     assert uniform["all"]["pcrp"]["n"] == 12 and set(uniform["all"]) >= {"pcrp", "pcrp_paper", "icp", "fgr_icp", "ransac_icp"}
     # the package's extensions (candidate vote, half turns, ICP) over the paper's bare registration
     assert uniform["all"]["pcrp"]["median"] < uniform["all"]["pcrp_paper"]["median"]
+
+
+def test_the_paper_variant_tries_only_the_papers_hypotheses():
+    """The paper's row must stay the paper's method as this package grows new hypotheses: on a
+    one-sided view with its sensor position (where view hypotheses would join in) every
+    hypothesis comes from RANSAC on feature matches."""
+    from pcrp_core import PCRP
+    from pcrp_core.evaluation.methods import PAPER_OPTIONS, _prepared
+    from pcrp_core.pose import Registrar
+    from pcrp_core.sources.procedural import generate_object
+    from pcrp_core.sources.views import partial_view
+    model = PCRP.load(None)
+    rng = np.random.default_rng(0)
+    p = generate_object("chair", 3).astype(np.float64)
+    seen, camera = partial_view(p, rng, 0.005, with_camera=True)
+    (c_q, q), (_, g) = _prepared(model.pointhop, model.unit, seen), _prepared(model.pointhop, model.unit, p)
+    for options, expected in ((PAPER_OPTIONS, {"ransac"}), (None, {"ransac", "view", "pca"})):
+        reg = Registrar(q, options or type(PAPER_OPTIONS)(), rng, viewpoint=(camera - c_q) / model.unit)
+        sources = {h.source.split("+")[0] for h in reg.seeds(g)}
+        assert sources == expected if options else sources >= expected

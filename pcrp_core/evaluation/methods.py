@@ -10,9 +10,9 @@ import numpy as np
 from pcrp_core.pose import PoseOptions, Registrar, prepare
 
 # The paper's registration: feature matches within the symmetry halves, Procrustes in RANSAC,
-# the best-fitting of those hypotheses; one retrieved object, no principal-axis or half-turn
-# hypotheses, no candidate vote, no ICP.
-PAPER_OPTIONS = PoseOptions(pca_hypotheses=False, flips=False, refine=False, consensus=False,
+# the best-fitting of those hypotheses; one retrieved object, no principal-axis, half-turn or
+# view hypotheses, no candidate vote, no ICP.
+PAPER_OPTIONS = PoseOptions(pca_hypotheses=False, flips=False, view_seeders=0, refine=False, consensus=False,
                             seeders=1, reverse_weight=0.0)
 
 
