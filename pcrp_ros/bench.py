@@ -32,7 +32,7 @@ STAGES = {
     "features": "= the query's features in all", "retrieval": "nearest VLAD vectors in the gallery",
     "gallery_features": "the retrieved objects' features (cached across queries)",
     "correspondences": "feature matches within symmetry halves", "ransac": "Procrustes in RANSAC",
-    "hypotheses": "principal-axis and half-turn hypotheses, coarse ICP",
+    "hypotheses": "principal-axis, half-turn and (for sensor clouds) view hypotheses, coarse ICP",
     "verification": "every hypothesis scored on every candidate (the vote)",
     "refinement": "final ICP and pose averaging", "registration": "= everything after retrieval",
     "total": "end to end"}
