@@ -111,8 +111,9 @@ def view_seeds(q: np.ndarray, viewpoint: np.ndarray, g: np.ndarray, g_tree: cKDT
     if ok is not None and ok.any():
         idx = idx[ok]
     cost = mean_distance_batch(src[:: max(1, len(src) // prefilter)], Rs[idx], ts[idx], g_tree)
-    for k in np.unique(idx // rolls):
-        sel = np.flatnonzero(idx // rolls == k)
+    direction = idx // rolls
+    for k in np.unique(direction):
+        sel = np.flatnonzero(direction == k)
         face = fronts[k][:: max(1, len(fronts[k]) // prefilter)]
         cost[sel] += distances_back(src_tree, face, Rs[idx[sel]], ts[idx[sel]]).mean(axis=1)
     return [(Rs[n], ts[n], "view") for n in idx[np.argsort(cost)[:keep]]]

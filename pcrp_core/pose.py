@@ -134,10 +134,9 @@ class Registrar:
         self.src = src
         # hypotheses are told apart on fewer points than the final refinement uses
         self.coarse_src = src if len(src) <= opts.coarse_points else src[: opts.coarse_points]
-        # the gallery's points are taken back into the query's frame to be matched (see _to_query)
+        # the gallery's points are taken back into the query's frame to be matched (scoring.distances_back)
         self.tree = cKDTree(src)
         self.coarse_tree = self.tree if self.coarse_src is src else cKDTree(self.coarse_src)
-        self._view_seeded = 0     # candidates that have had view hypotheses (see seeds)
 
     def refine(self, R, t, gallery: Prepared, iterations: int, source: str, coarse: bool = True) -> Hypothesis:
         return self.refine_many([R], [t], gallery, iterations, [source], coarse)[0]
@@ -192,13 +191,13 @@ class Registrar:
         ok = self.upright([h.R for h in hyps]) if hyps else np.zeros(0, bool)
         return [h for h, k in zip(hyps, ok) if k] or hyps
 
-    def seeds(self, gallery: Prepared):
-        """Coarsely refined hypotheses for one feature-bearing gallery object."""
+    def seeds(self, gallery: Prepared, rank: int = 0):
+        """Coarsely refined hypotheses for one gallery object; rank is its place among the
+        candidates (the first view_seeders of them also get view hypotheses, for sensor clouds)."""
         self.clock.lap("hypotheses")
         opts, upright = self.opts, None if self.up is None else self.upright
         seeds = hypotheses.ransac_seeds(self.query, gallery, opts, self.rng, self.clock) if gallery.features is not None else []
-        if self.viewpoint is not None and self._view_seeded < opts.view_seeders:
-            self._view_seeded += 1
+        if self.viewpoint is not None and rank < opts.view_seeders:
             seeds += hypotheses.view_seeds(self.query.points, self.viewpoint, gallery.points, gallery.tree,
                                            self.coarse_src, self.coarse_tree, opts.view_directions, opts.view_rolls,
                                            opts.view_keep, opts.view_prefilter, upright)
@@ -251,8 +250,8 @@ class Registrar:
         pool = []
         n_seed = len(verifiers) if self.opts.seeders <= 0 else max(len(matched), self.opts.seeders)
         seeders = verifiers[:n_seed]
-        for g in seeders:
-            pool += _distinct(sorted(self.seeds(g), key=lambda h: h.chamfer), 2)
+        for rank, g in enumerate(seeders):
+            pool += _distinct(sorted(self.seeds(g, rank), key=lambda h: h.chamfer), 2)
         # a seeder with no upright hypothesis hands back all of its own: drop those if others have some
         pool = self._keep_upright(pool)
         # the best few distinct rotations go to the vote; the rest only cost time
