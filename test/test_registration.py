@@ -134,3 +134,24 @@ def test_view_hypotheses_find_a_one_sided_view_where_principal_axes_do_not():
         near_view += min(rotation_error_deg(Rg.T, R) for Rg, _, _ in guesses) < 35
         near_axes += min(rotation_error_deg(Rg.T, R) for Rg, _, _ in axes) < 35
     assert near_view >= 12 and near_view >= near_axes + 5
+
+
+def test_vote_is_not_swayed_by_how_far_a_relative_is_from_the_query():
+    # Eight close relatives and eight farther ones (of other proportions, say): a farther
+    # relative's chamfers are larger whatever the pose, by a factor of its own. The vote asks
+    # each relative how much worse a hypothesis fits than its best, so rescaling a far relative's
+    # column must not change the winner. (Judged on raw chamfers, the median sits between the
+    # close and the far columns and moves with that scale.)
+    from pcrp_core.pose import _vote
+    rng = np.random.default_rng(0)
+    voters = np.ones(16, bool)
+    changed = 0
+    for _ in range(200):
+        close = rng.uniform(0.08, 0.12, (6, 8))
+        far = rng.uniform(0.20, 0.40, (6, 8))
+        scaled = far * rng.uniform(0.7, 2.0, 8)       # still never a row's best fit
+        k = _vote(np.hstack([close, far]), voters, 0.5)
+        assert k == _vote(np.hstack([close, scaled]), voters, 0.5)
+        changed += k != _vote(np.hstack([close, far]), ~np.r_[np.zeros(8, bool), np.ones(8, bool)], 0.5)
+    # not a vote that ignores its voters: leaving the far relatives out does change answers
+    assert changed > 20
