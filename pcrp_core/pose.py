@@ -268,6 +268,7 @@ class Registrar:
         voters = np.ones(len(verifiers), bool)
         if groups is not None:
             voters = np.asarray(groups) == groups[int(np.argmin(ch.min(axis=0)))]
+        # the candidates' vote decides (_vote)...
         k = _vote(ch, voters, self.opts.consensus_weight)
         # ...unless one candidate explains the cloud far better than every other: then it is the
         # very object (a gallery of known objects), and relatives turned otherwise must not outvote
