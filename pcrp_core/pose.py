@@ -13,14 +13,15 @@ rotation fits every candidate of the category, while a flip that happens to suit
 instance is outvoted by the others. The final pose averages the candidates that agree and
 fit nearly as well as the best, each refined once more (for whole clouds) with matches taken
 both ways, so that it sits centred on the candidate rather than wherever the query's points
-happen to touch its surface. When the caller knows which way is up, hypotheses that tip the
-gallery's up axis away from it are dropped before any of this (Registrar.upright): the turns
-that near-symmetric shapes are most confused by are upside-down and lying-down ones. All of it
-happens in normalised coordinates, query registered onto gallery: g ≈ R @ q + t.
+happen to touch its surface; where both are mirror-symmetric, the query's mirror plane is then
+laid on the chosen object's (registration/mirror.py). When the caller knows which way is up,
+hypotheses that tip the gallery's up axis away from it are dropped before any of this
+(Registrar.upright): the turns that near-symmetric shapes are most confused by are upside-down
+and lying-down ones. All of it happens in normalised coordinates, query registered onto gallery: g ≈ R @ q + t.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -28,6 +29,7 @@ from scipy.spatial import cKDTree
 from pcrp_core import hypotheses
 from pcrp_core.registration import fit_quality_batch, icp_batch, icp_symmetric
 from pcrp_core.registration.icp import transform_batch
+from pcrp_core.registration.mirror import gallery_mirror, mirror_plane, snap
 from pcrp_core.registration.scoring import distances_back
 from pcrp_core.symmetry import split_halves
 from pcrp_core.timing import Clock
@@ -42,6 +44,14 @@ class Prepared:
     sampled: np.ndarray | None = None
     features: np.ndarray | None = None
     halves: np.ndarray | None = None
+    # what is worked out about a gallery object once and kept as long as it stays in the cache
+    _memo: dict = field(default_factory=dict, repr=False)
+
+    def memo(self, key, compute):
+        """compute(), worked out on first use for this key and remembered."""
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]
 
 
 def prepare(points: np.ndarray, sampled_idx=None, features=None) -> Prepared:
@@ -82,6 +92,12 @@ class PoseOptions:
     # whole clouds only: the averaged candidates are refined once more with matches taken both ways
     symmetric_iterations: int = 20
     symmetric_reverse_trim: float = 0.9   # the gallery side trimmed less: what it has and the query lacks is the evidence
+    # whole clouds only: when the chosen gallery object is mirror-symmetric about a coordinate
+    # plane, the query's own mirror plane is laid on it (registration/mirror.py), if the query is
+    # as symmetric (residuals in point spacings) and that turns it by at most mirror_max_deg
+    mirror_snap: bool = True
+    mirror_tolerance: float = 1.1
+    mirror_max_deg: float = 5.0
     icp_iterations: int = 20
     icp_trim: float = 0.8
     icp_points: int = 256
@@ -259,6 +275,7 @@ class Registrar:
         if not self.opts.consensus or len(verifiers) == 1:
             best = min(pool, key=lambda h: h.chamfer)
             final = self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source, coarse=False)
+            final = self._finish(final, verifiers[0])
             self.clock.lap("refinement")
             return 0, final
         # chamfer of each hypothesis on each candidate, after a short refinement there
@@ -288,10 +305,27 @@ class Registrar:
         else:
             poses = [(refined[n].R, refined[n].t) for n in near]
         # only the poses are averaged; the result is scored once, on the best candidate
-        avg = _average(poses, refined[j])
-        final = self.refine(avg.R, avg.t, verifiers[j], 0, avg.source, coarse=False)
+        final = self._finish(_average(poses, refined[j]), verifiers[j])
         self.clock.lap("refinement")
         return j, final
+
+    def _finish(self, hyp: Hypothesis, gallery: Prepared) -> Hypothesis:
+        """hyp with its mirror plane laid on the gallery object's where that applies (see
+        PoseOptions.mirror_snap), scored on gallery."""
+        R, t, source = hyp.R, hyp.t, hyp.source
+        opts, q = self.opts, self.query
+        target = None
+        if self.viewpoint is None and opts.refine and opts.mirror_snap:
+            # (a one-sided view has no mirror image of itself to find)
+            target = gallery.memo(("mirror", opts.mirror_tolerance, opts.mirror_max_deg), lambda: gallery_mirror(
+                gallery.points, gallery.tree, opts.mirror_tolerance, opts.mirror_max_deg))
+        if target is not None:
+            plane = mirror_plane(q.points, q.tree, R.T @ target.normal)
+            tilt = np.degrees(np.arccos(np.clip((R @ plane.normal) @ target.normal, -1.0, 1.0)))
+            if plane.residual < opts.mirror_tolerance and tilt <= opts.mirror_max_deg:
+                R, t = snap(R, t, plane, target, q.points.mean(axis=0))
+                source += "+mirror"
+        return self.refine(R, t, gallery, 0, source, coarse=False)
 
 
 def _vote(ch: np.ndarray, voters: np.ndarray, weight: float) -> int:

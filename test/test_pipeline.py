@@ -1,4 +1,7 @@
 """End to end on real ModelNet40 objects: retrieval, pose, rejection of unusable input."""
+import copy
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -52,6 +55,28 @@ def test_same_object_under_two_rotations_gives_the_same_canonical_pose(model):
         # undo the known motion: what remains is the estimated pose of the object itself
         poses.append(R.T @ r.rotation)
     assert rotation_error_deg(poses[0], poses[1]) < 5.0
+
+
+def test_mirror_planes_tighten_the_poses_of_mirror_symmetric_objects(model):
+    """Held-back airplanes and chairs, whole, in random poses: laying each query's mirror plane on
+    its gallery object's (registration/mirror.py) must bring the poses ICP aligns closer still."""
+    rng = np.random.default_rng(11)
+    queries = []
+    for category in ("airplane", "chair"):
+        for p in modelnet(category, "test", 10)[0]:
+            R, t = random_pose(rng)
+            queries.append((p @ R.T + t, R))
+    errors = {}
+    for snap in (False, True):
+        m = copy.copy(model)          # shares the gallery and its cache, not the options
+        m.pose_options = dataclasses.replace(model.pose_options, mirror_snap=snap)
+        errors[snap] = np.array([rotation_error_deg(m.estimate(q).rotation, R) for q, R in queries])
+    aligned = (errors[False] < 5.0) & (errors[True] < 5.0)
+    assert aligned.sum() >= 10
+    # a correction, not a new guess: no pose moves off by more than sampling noise...
+    assert np.all(errors[True][aligned] < errors[False][aligned] + 0.3)
+    # ...and together they come closer (measured: median 0.74 -> 0.50 degrees over 11 aligned)
+    assert np.median(errors[True][aligned]) < 0.8 * np.median(errors[False][aligned])
 
 
 @pytest.mark.parametrize("category", ["chair", "sofa"])

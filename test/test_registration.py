@@ -1,4 +1,4 @@
-"""Registration stages on known transforms: Procrustes, RANSAC, ICP, symmetry split."""
+"""Registration stages on known transforms: Procrustes, RANSAC, ICP, symmetry split, mirror planes."""
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -6,6 +6,7 @@ from scipy.spatial import cKDTree
 from helpers import MODELNET, modelnet, random_pose, rotation_error_deg
 from pcrp_core.pose import _vote
 from pcrp_core.registration import fit_quality, icp, icp_symmetric, procrustes, procrustes_batch, ransac
+from pcrp_core.registration.mirror import MirrorPlane, gallery_mirror, mirror_plane, snap
 from pcrp_core.symmetry import split_halves, symmetry_axis
 
 
@@ -155,3 +156,64 @@ def test_vote_is_not_swayed_by_how_far_a_relative_is_from_the_query():
         changed += k != _vote(np.hstack([close, far]), close_only, 0.5)
     # not a vote that ignores its voters: leaving the far relatives out does change answers
     assert changed > 20
+
+
+def _turn(axis, deg):
+    from scipy.spatial.transform import Rotation
+    return Rotation.from_rotvec(np.radians(deg) * np.asarray(axis, dtype=float) / np.linalg.norm(axis)).as_matrix()
+
+
+def test_mirror_plane_is_found_from_a_guess_four_degrees_off():
+    # a generated chair is mirror-symmetric about x = 0, its two sides sampled independently
+    from pcrp_core.sources.procedural import generate_object
+    chair = generate_object("chair", 0).astype(np.float64)
+    chair -= [chair[:, 0].mean(), 0.0, 0.0]
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        R, t = random_pose(rng)
+        q = chair @ R.T + t
+        truth = R[:, 0]
+        guess = _turn(np.cross(truth, rng.normal(size=3)), 4.0) @ truth
+        plane = mirror_plane(q, cKDTree(q), guess)
+        # to within what sampling allows (each side of this chair is drawn on its own)
+        assert np.degrees(np.arccos(min(1.0, plane.normal @ truth))) < 0.75
+        assert abs(plane.offset - truth @ t) < 0.01          # the plane passes through R @ 0 + t
+        assert plane.residual < 1.1
+
+
+def test_gallery_mirror_wants_a_mirror_plane_near_a_coordinate_plane():
+    from pcrp_core.sources.procedural import generate_object
+    chair = generate_object("chair", 0).astype(np.float64)
+    found = gallery_mirror(chair, cKDTree(chair), 1.1, 5.0)
+    assert found is not None and found.normal[0] > np.cos(np.radians(0.5))
+    tilted = chair @ _turn([0, 0, 1], 2.0).T
+    found = gallery_mirror(tilted, cKDTree(tilted), 1.1, 5.0)
+    assert found is not None and abs(np.degrees(np.arccos(found.normal[0])) - 2.0) < 0.3
+    tilted = chair @ _turn([0, 0, 1], 10.0).T
+    assert gallery_mirror(tilted, cKDTree(tilted), 1.1, 5.0) is None
+    # no longer symmetric: a shelf beside one side of the seat (its best plane stays within
+    # a degree of x = 0, but 13 % of the points have no mirror image)
+    rng = np.random.default_rng(0)
+    shelf = np.c_[rng.uniform(0.2, 0.45, 150), rng.uniform(-0.3, 0.3, 150), rng.uniform(0.0, 0.1, 150)]
+    lopsided = np.vstack([chair, shelf])
+    assert gallery_mirror(lopsided, cKDTree(lopsided), 1.1, 5.0) is None
+    # nor with one front corner gone
+    cut = chair[~((chair[:, 0] > 0.05) & (chair[:, 1] > 0.1))]
+    assert gallery_mirror(cut, cKDTree(cut), 1.1, 5.0) is None
+
+
+def test_snap_lays_the_query_plane_on_the_gallery_plane_with_the_least_turn():
+    rng = np.random.default_rng(4)
+    R, t = random_pose(rng)
+    normal = rng.normal(size=3)
+    normal /= np.linalg.norm(normal)
+    plane = MirrorPlane(normal, 0.3, 1.0)                     # in the query's frame
+    target = MirrorPlane(_turn(rng.normal(size=3), 2.0) @ R @ normal, -0.1, 1.0)
+    R2, t2 = snap(R, t, plane, target, rng.normal(size=3))
+    assert np.allclose(R2 @ normal, target.normal)
+    # a point of the query's plane lands on the gallery's plane
+    on_plane = 0.3 * normal + np.cross(normal, rng.normal(size=3))
+    assert abs((R2 @ on_plane + t2) @ target.normal - target.offset) < 1e-9
+    # the turn is the plane's tilt and no more
+    tilt = np.degrees(np.arccos(np.clip((R @ normal) @ target.normal, -1, 1)))
+    assert tilt > 0.5 and abs(rotation_error_deg(R2, R) - tilt) < 1e-6

@@ -1,4 +1,4 @@
-"""Registration: feature matches within symmetry halves, Procrustes in RANSAC, ICP, scoring."""
+"""Registration: feature matches within symmetry halves, Procrustes in RANSAC, ICP, mirror planes, scoring."""
 from pcrp_core.registration.icp import icp, icp_batch, icp_symmetric
 from pcrp_core.registration.procrustes import procrustes, procrustes_batch
 from pcrp_core.registration.ransac import ransac
