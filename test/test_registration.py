@@ -207,8 +207,8 @@ def test_snap_lays_the_query_plane_on_the_gallery_plane_with_the_least_turn():
     R, t = random_pose(rng)
     normal = rng.normal(size=3)
     normal /= np.linalg.norm(normal)
-    plane = MirrorPlane(normal, 0.3, 1.0)                     # in the query's frame
-    target = MirrorPlane(_turn(rng.normal(size=3), 2.0) @ R @ normal, -0.1, 1.0)
+    plane = MirrorPlane(normal, 0.3, 1.0, 0.02)               # in the query's frame
+    target = MirrorPlane(_turn(rng.normal(size=3), 2.0) @ R @ normal, -0.1, 1.0, 0.02)
     R2, t2 = snap(R, t, plane, target, rng.normal(size=3))
     assert np.allclose(R2 @ normal, target.normal)
     # a point of the query's plane lands on the gallery's plane

@@ -23,11 +23,13 @@ TRIM = 0.9
 
 @dataclass
 class MirrorPlane:
-    """The plane {x : normal . x = offset} and how far the mirrored points land from the cloud,
-    in units of the cloud's point spacing (about 1 for a mirror-symmetric cloud)."""
+    """The plane {x : normal . x = offset}; rms: how far the mirrored points land from the cloud
+    (trimmed root mean square); residual: the same in units of the cloud's point spacing (about 1
+    for a mirror-symmetric cloud)."""
     normal: np.ndarray
     offset: float
     residual: float
+    rms: float
 
 
 def spacing(points: np.ndarray, tree: cKDTree) -> float:
@@ -35,7 +37,8 @@ def spacing(points: np.ndarray, tree: cKDTree) -> float:
     return float(np.median(tree.query(points, 2)[0][:, 1]))
 
 
-def _trimmed_rms(dist: np.ndarray) -> float:
+def trimmed_rms(dist: np.ndarray) -> float:
+    """Root mean square of the TRIM share of smallest distances."""
     k = max(1, int(TRIM * len(dist)))
     return float(np.sqrt(np.mean(np.partition(dist, k - 1)[:k] ** 2)))
 
@@ -56,8 +59,8 @@ def mirror_plane(points: np.ndarray, tree: cKDTree, near: np.ndarray, iterations
     # lowest eigenvector is the normal however slightly ICP turned the image in the plane
     normal = np.linalg.eigh((L + L.T) / 2)[1][:, 0]
     normal = normal if normal @ near >= 0 else -normal
-    residual = _trimmed_rms(tree.query(mirrored @ Rm.T + tm)[0]) / spacing(points, tree)
-    return MirrorPlane(normal, float(normal @ b) / 2, residual)
+    rms = trimmed_rms(tree.query(mirrored @ Rm.T + tm)[0])
+    return MirrorPlane(normal, float(normal @ b) / 2, rms / spacing(points, tree), rms)
 
 
 def gallery_mirror(points: np.ndarray, tree: cKDTree, tolerance: float, max_deg: float) -> MirrorPlane | None:
@@ -72,7 +75,7 @@ def gallery_mirror(points: np.ndarray, tree: cKDTree, tolerance: float, max_deg:
     for axis in range(3):
         mirrored = points.copy()
         mirrored[:, axis] = 2 * centre[axis] - mirrored[:, axis]
-        residuals.append(_trimmed_rms(tree.query(mirrored)[0]) / gap)
+        residuals.append(trimmed_rms(tree.query(mirrored)[0]) / gap)
     axis = int(np.argmin(residuals))
     plane = mirror_plane(points, tree, np.eye(3)[axis])
     if plane.residual >= tolerance or np.degrees(np.arccos(min(1.0, plane.normal[axis]))) > max_deg:
