@@ -36,7 +36,7 @@ PARAMETERS = {
     "input_topics": (["segmented_object"], "PointCloud2 topics of segmented objects, one object per message.", None, True),
     "min_points": (32, "Clouds with fewer finite points are rejected (reason too_few_points).", (8, 100000), False),
     "max_points": (1024, "Larger clouds are downsampled to this many points, never refused.", (64, 100000), False),
-    "n_candidates": (16, "Retrieved gallery objects registered and voted on per cloud (1 = the paper; 8 answers ~1.7x faster, less accurately).", (1, 50), False),
+    "n_candidates": (16, "Retrieved gallery objects registered and voted on per cloud (1 = the paper; 8 answers ~1.5x faster, less accurately).", (1, 50), False),
     "min_score": (0.5, "Fit score (share of points on the aligned model) below which a cloud is rejected.", (0.0, 1.0), False),
     "scale_mode": ("metric", "metric: clouds are in the gallery's units (metres); normalize: clouds of unknown "
                              "scale are resized to the gallery's, and the estimated scale is dropped from the pose.",
