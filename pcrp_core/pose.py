@@ -17,7 +17,8 @@ happen to touch its surface; where both are mirror-symmetric, the query's mirror
 laid on the chosen object's (registration/mirror.py). When the caller knows which way is up,
 hypotheses that tip the gallery's up axis away from it are dropped before any of this
 (Registrar.upright): the turns that near-symmetric shapes are most confused by are upside-down
-and lying-down ones. All of it happens in normalised coordinates, query registered onto gallery: g ≈ R @ q + t.
+and lying-down ones. All of it happens in normalised coordinates, query registered onto gallery:
+g ≈ R @ q + t.
 """
 from __future__ import annotations
 
@@ -139,8 +140,8 @@ class Registrar:
                  timings: dict | None = None, up=None):
         """timings, when given, gets seconds added per stage: correspondences, ransac,
         hypotheses (principal axes, flips, their coarse ICP), verification (the vote) and
-        refinement (final ICP and averaging). up: (the up direction in the query's frame, the
-        gallery's up axis), unit vectors, when the caller knows which way is up."""
+        refinement (final ICP, averaging, the mirror-plane finish). up: (the up direction in the
+        query's frame, the gallery's up axis), unit vectors, when the caller knows which way is up."""
         self.query, self.opts, self.rng = query, opts, rng
         self.clock = Clock(timings)
         self.viewpoint = viewpoint

@@ -34,7 +34,7 @@ STAGES = {
     "correspondences": "feature matches within symmetry halves", "ransac": "Procrustes in RANSAC",
     "hypotheses": "principal-axis, half-turn and (for sensor clouds) view hypotheses, coarse ICP",
     "verification": "every hypothesis scored on every candidate (the vote)",
-    "refinement": "final ICP and pose averaging", "registration": "= everything after retrieval",
+    "refinement": "final ICP, pose averaging, the mirror-plane finish", "registration": "= everything after retrieval",
     "total": "end to end"}
 CACHE = Path(os.environ.get("PCRP_CACHE", Path.home() / ".cache" / "pcrp")) / "bench"
 
