@@ -57,6 +57,13 @@ def test_same_object_under_two_rotations_gives_the_same_canonical_pose(model):
     assert rotation_error_deg(poses[0], poses[1]) < 5.0
 
 
+def _mirror_snap(model, on: bool):
+    """The model with the mirror-plane finish on or off; shares the gallery and its cache."""
+    m = copy.copy(model)
+    m.pose_options = dataclasses.replace(model.pose_options, mirror_snap=on)
+    return m
+
+
 def test_mirror_planes_tighten_the_poses_of_mirror_symmetric_objects(model):
     """Held-back airplanes and chairs, whole, in random poses: laying each query's mirror plane on
     its gallery object's (registration/mirror.py) must bring the poses ICP aligns closer still."""
@@ -66,11 +73,8 @@ def test_mirror_planes_tighten_the_poses_of_mirror_symmetric_objects(model):
         for p in modelnet(category, "test", 10)[0]:
             R, t = random_pose(rng)
             queries.append((p @ R.T + t, R))
-    errors = {}
-    for snap in (False, True):
-        m = copy.copy(model)          # shares the gallery and its cache, not the options
-        m.pose_options = dataclasses.replace(model.pose_options, mirror_snap=snap)
-        errors[snap] = np.array([rotation_error_deg(m.estimate(q).rotation, R) for q, R in queries])
+    errors = {snap: np.array([rotation_error_deg(_mirror_snap(model, snap).estimate(q).rotation, R)
+                              for q, R in queries]) for snap in (False, True)}
     aligned = (errors[False] < 5.0) & (errors[True] < 5.0)
     assert aligned.sum() >= 10
     # a correction, not a new guess: no pose moves off by more than sampling noise...
@@ -88,11 +92,7 @@ def test_mirror_planes_leave_known_objects_to_their_own_fit(model):
         p = model.gallery_cloud(gid).astype(np.float64)
         R, t = random_pose(rng)
         q = (p + rng.normal(scale=0.01 * np.linalg.norm(p - p.mean(0), axis=1).max(), size=p.shape)) @ R.T + t
-        poses = []
-        for snap in (False, True):
-            m = copy.copy(model)
-            m.pose_options = dataclasses.replace(model.pose_options, mirror_snap=snap)
-            poses.append(m.estimate(q).rotation)
+        poses = [_mirror_snap(model, snap).estimate(q).rotation for snap in (False, True)]
         np.testing.assert_allclose(poses[1], poses[0], atol=1e-9)
 
 

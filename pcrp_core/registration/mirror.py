@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
 
 from pcrp_core.registration.icp import icp
 
@@ -83,22 +84,13 @@ def gallery_mirror(points: np.ndarray, tree: cKDTree, tolerance: float, max_deg:
     return plane
 
 
-def rotation_between(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """The smallest rotation taking unit vector u to unit vector v (Rodrigues)."""
-    axis = np.cross(u, v)
-    s, c = np.linalg.norm(axis), float(np.clip(u @ v, -1.0, 1.0))
-    if s < 1e-12:
-        return np.eye(3)      # callers only snap small corrections: never the opposite direction
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]]) / s
-    return np.eye(3) + s * K + (1 - c) * K @ K
-
-
 def snap(R: np.ndarray, t: np.ndarray, plane: MirrorPlane, target: MirrorPlane,
          query_centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pose (R, t), mapping the query into the gallery's frame (x_g = R x_q + t), turned the least
     so that the query's mirror plane (in the query's frame) becomes the gallery's (target): a
     turn about the query's centroid, then a shift along the plane's normal."""
-    C = rotation_between(R @ plane.normal, target.normal)
+    # the shortest turn between two single vectors (as hypotheses.py aligns up axes)
+    C = Rotation.align_vectors([target.normal], [R @ plane.normal])[0].as_matrix()
     c = R @ query_centre + t
     R2, t2 = C @ R, C @ (t - c) + c
     on_plane = R2 @ (plane.offset * plane.normal) + t2
