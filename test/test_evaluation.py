@@ -81,6 +81,33 @@ def test_the_frame_audit_finds_the_axis_turn_between_two_copies_of_an_object():
             {"name": "b", "category": "car", "nearest_agrees": False, "share_agreeing": 0.1, "nearest_turn_deg": 90.0}]
     d = frames.summarise(rows)["car"]
     assert d["nearest_agrees"] == 0.5 and d["quarter_turns"] == 0.5 and d["half_turns"] == 0.0
+    assert d["look_alike_mean_deg"] == 45.0 and d["look_alike_median_deg"] == 45.0
+
+
+def test_the_long_side_check_tells_which_way_the_labels_lay_an_elongated_object():
+    from pcrp_core.evaluation import frames
+    rng = np.random.default_rng(0)
+    cube = rng.uniform(-1, 1, (64, 3))
+    clouds = np.stack([cube * [1.0, 0.4, 0.3], cube * [0.4, 1.0, 0.3], cube * [1.0, 0.8, 0.3]])
+    along_y = frames.long_side_along_y(clouds)
+    # the third is barely longer than wide: which side is longer says nothing about the labels
+    assert along_y[:2].tolist() == [0.0, 1.0] and np.isnan(along_y[2])
+
+
+def test_the_bar_names_the_labels_bound_and_a_tie_at_the_quarter_turn():
+    from pcrp_core.evaluation import report
+    errs = lambda mean, median: {"mean": mean, "median": median}
+    res = {"pose": {"uniform": {"summary": {
+        "car": {"pcrp": errs(70.5, 89.9), "ransac_icp": errs(88.7, 89.8)},
+        "chair": {"pcrp": errs(9.9, 1.6), "ransac_icp": errs(32.2, 4.3)}}}},
+        "frames": {"summary": {
+            "car": {"nearest_agrees": 0.38, "look_alike_mean_deg": 73.8, "look_alike_median_deg": 90.0},
+            "chair": {"nearest_agrees": 1.0, "look_alike_mean_deg": 0.0, "look_alike_median_deg": 0.0}}}}
+    rows = {line.split("|")[1].strip(): line for line in report.bar(res)[2:] if line}
+    car, chair = rows["pose, car, uniform rotations"], rows["pose, chair, uniform rotations"]
+    assert "paper: **no** (labels: perfect registration to the nearest look-alike scores 73.8° / 90.0°)" in car
+    assert "classical: **no** (both medians at the quarter turn)" in car
+    assert "paper: yes; classical: yes |" in chair and "labels" not in chair
 
 
 @pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")

@@ -58,7 +58,10 @@ def run_frames(s: Settings) -> dict:
         names, pts = load_split(s.data, category, "test", s.per_category)
         items += [(n, category, p) for n, p in zip(names, pts)]
     rows = s.map(frames.audit_one, items, {"data": str(s.data)}, "frames of the data")
-    return {"summary": frames.summarise(rows), "rows": rows}
+    summary = frames.summarise(rows)
+    for category in summary:
+        summary[category]["long_side"] = frames.long_sides(s.data, category, s.per_category)
+    return {"summary": summary, "rows": rows}
 
 
 def run_registration(s: Settings, model_path) -> dict:
