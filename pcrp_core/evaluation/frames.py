@@ -78,11 +78,11 @@ def long_side_along_y(points: np.ndarray) -> np.ndarray:
     return np.where(ratio >= ELONGATED, along_y, np.nan)
 
 
-def long_sides(data, category: str, limit: int | None = None) -> dict:
+def long_sides(train: np.ndarray, test: np.ndarray) -> dict:
     """Share of a category's elongated objects whose long side lies along y, per split."""
     out = {}
-    for split in ("train", "test"):
-        y = long_side_along_y(load_split(data, category, split, limit if split == "test" else None)[1])
+    for split, points in (("train", train), ("test", test)):
+        y = long_side_along_y(points)
         y = y[~np.isnan(y)]
         out[split] = {"elongated": int(len(y)), "along_y": float(y.mean()) if len(y) else float("nan")}
     return out

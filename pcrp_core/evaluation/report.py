@@ -211,7 +211,8 @@ def frames_md(summary: dict) -> list[str]:
                   "cars, along x for the rest. A randomly rotated query does not show which way its labeller laid it, "
                   f"so a method answering every car one way is a quarter turn off on at least "
                   f"{_pct(min(car['test']['along_y'], 1 - car['test']['along_y']))} of them; a mean under the paper's "
-                  "11.22° allows at most one car in eight to be a quarter turn off. (An airplane's long side is its "
+                  f"{PAPER_POSE['car'][0]}° allows at most {_pct(PAPER_POSE['car'][0] / 90)} of them a quarter turn "
+                  "off. (An airplane's long side is its "
                   "span for some and its length for others, so the same count does not settle airplanes; the "
                   "look-alike columns do.)"]
     return lines + [""]
