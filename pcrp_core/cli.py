@@ -8,8 +8,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 import time
+
+# Options whose values may start with a minus (an axis "-y", a vector "-1,0,0"). argparse takes
+# such a value for an option of its own unless it is written "--up=-1,0,0"; joined before parsing,
+# "--up -1,0,0" works as a user would type it.
+SIGNED_OPTIONS = ("--up", "--up-axis")
+_SIGNED_VALUE = re.compile(r"-(?:[xyz]|[\d.][\d.,eE+-]*)")
 
 
 def _progress(it, **kw):
@@ -81,7 +88,7 @@ def register_query(sub) -> None:
     p.add_argument("--min-score", type=float, default=None, help="reject below this fit score")
     p.add_argument("--up", default=None, metavar="X,Y,Z",
                    help="which way is up in the cloud's frame, if known: answers then keep the object upright "
-                        "within --up-tolerance (write --up=-1,0,0 when the first number is negative)")
+                        "within --up-tolerance")
     p.add_argument("--up-tolerance", type=float, default=None, metavar="DEG",
                    help="how far an answer may tip the object from --up (default 60)")
     p.set_defaults(func=_query)
@@ -202,8 +209,19 @@ def build_parser(extensions=()) -> argparse.ArgumentParser:
     return parser
 
 
+def join_signed_values(argv: list[str]) -> list[str]:
+    """argv with "--up -1,0,0" and "--up-axis -y" joined into "--up=-1,0,0" and "--up-axis=-y"."""
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] in SIGNED_OPTIONS and _SIGNED_VALUE.fullmatch(arg):
+            out[-1] += "=" + arg
+        else:
+            out.append(arg)
+    return out
+
+
 def run(parser: argparse.ArgumentParser, argv=None) -> int:
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_signed_values(sys.argv[1:] if argv is None else list(argv)))
     return int(args.func(args) or 0)
 
 

@@ -177,7 +177,7 @@ def register_process(sub) -> None:
                    help="clouds are complete objects, not one sensor's view from the frame origin")
     p.add_argument("--topics", nargs="*", default=None, help="cloud topics to answer (default: every PointCloud2 topic)")
     p.add_argument("--up", default=None, metavar="X,Y,Z",
-                   help="which way is up in the clouds' frame, as the node's up_vector (--up=-1,0,0 for a leading minus)")
+                   help="which way is up in the clouds' frame, as the node's up_vector")
     p.set_defaults(func=_process)
 
 

@@ -42,3 +42,21 @@ def test_a_missing_model_or_cloud_fails_with_one_clear_line(tmp_path):
     assert out.returncode == 2 and "no such model" in out.stderr and "Traceback" not in out.stderr
     out = pcrp("query", "default", str(tmp_path / "x.npy"))
     assert out.returncode == 2 and "x.npy" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_a_leading_minus_is_a_value_not_an_option():
+    """`--up -1,0,0` and `--up-axis -y`, as a user types them (argparse alone wants `--up=-1,0,0`)."""
+    from pcrp_core.cli import build_parser, join_signed_values
+    from pcrp_ros.cli import bag_commands
+    parser = build_parser(extensions=[bag_commands.register])
+    args = parser.parse_args(join_signed_values(["query", "m", "c.ply", "--up", "-1,0,0", "--json"]))
+    assert args.up == "-1,0,0" and args.json
+    args = parser.parse_args(join_signed_values(["build", "procedural", "--out", "m", "--up-axis", "-y"]))
+    assert args.up_axis == "-y"
+    args = parser.parse_args(join_signed_values(["process", "bag", "--out", "o", "--up", "-0.5,0,-.5e0"]))
+    assert args.up == "-0.5,0,-.5e0"
+    # a forgotten value is still an error, not swallowed as one
+    assert join_signed_values(["query", "m", "c", "--up", "--json"]) == ["query", "m", "c", "--up", "--json"]
+    # and through the command itself (unjoined, argparse stops at "--up-axis: expected one argument")
+    proc = pcrp("build", "--up-axis", "-y", "--help")
+    assert proc.returncode == 0 and "--up-axis" in proc.stdout, proc.stderr
