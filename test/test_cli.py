@@ -47,7 +47,7 @@ def test_a_missing_model_or_cloud_fails_with_one_clear_line(tmp_path):
 def test_a_leading_minus_is_a_value_not_an_option():
     """`--up -1,0,0` and `--up-axis -y`, as a user types them (argparse alone wants `--up=-1,0,0`)."""
     from pcrp_core.cli import build_parser, join_signed_values
-    from pcrp_ros.cli import bag_commands
+    from pcrp_ros import bag_commands
     parser = build_parser(extensions=[bag_commands.register])
     args = parser.parse_args(join_signed_values(["query", "m", "c.ply", "--up", "-1,0,0", "--json"]))
     assert args.up == "-1,0,0" and args.json

@@ -205,12 +205,14 @@ def frames_md(summary: dict) -> list[str]:
                   "was labelled, which no shape cue measured here predicts; on this copy of the data their medians "
                   "and shares under 5° are the comparable figures."]
     car = summary.get("car", {}).get("long_side")
-    if car and min(car["test"]["along_y"], 1 - car["test"]["along_y"]) > 0.1:
+    # the smaller share: off by a quarter turn whichever single way a method answers
+    minority = min(car["test"]["along_y"], 1 - car["test"]["along_y"]) if car else 0.0
+    if minority > 0.1:
         lines += ["", f"A car's long side is its length, however it was labelled: the labels lay it along y for "
                   f"{_pct(car['train']['along_y'])} of the train cars and {_pct(car['test']['along_y'])} of the test "
                   "cars, along x for the rest. A randomly rotated query does not show which way its labeller laid it, "
                   f"so a method answering every car one way is a quarter turn off on at least "
-                  f"{_pct(min(car['test']['along_y'], 1 - car['test']['along_y']))} of them; a mean under the paper's "
+                  f"{_pct(minority)} of them; a mean under the paper's "
                   f"{PAPER_POSE['car'][0]}° allows at most {_pct(PAPER_POSE['car'][0] / 90)} of them a quarter turn "
                   "off. (An airplane's long side is its "
                   "span for some and its length for others, so the same count does not settle airplanes; the "
