@@ -27,15 +27,15 @@ test: setup
 
 # regenerates docs/results/ROBUSTNESS.md (about 15 minutes: every bad input, then a 10-minute soak)
 robustness: setup
-	$(VENV)/bin/pcrp robustness --out docs/results
+	$(PY) -m tools robustness --out docs/results
 
 # regenerates docs/results/RESULTS.md: the paper's experiments and the baselines (about 40 minutes on 2 cores)
 eval: setup
-	$(VENV)/bin/pcrp eval --data ../shared/data/modelnet40 --out docs/results
+	$(PY) -m tools paper-eval --data ../shared/data/modelnet40 --out docs/results
 
 # regenerates docs/results/BENCHMARKS.md: speed, memory, scale, the node under load (about 30 minutes)
 bench: setup
-	$(VENV)/bin/pcrp bench --out docs/results
+	$(PY) -m tools bench --out docs/results
 
 clean-venv:
 	rm -rf $(VENV)

@@ -9,7 +9,7 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(include=["pcrp_core", "pcrp_core.*", "pcrp_ros", "pcrp_ros.*"]),
-    package_data={"pcrp_core": ["data/*", "data/*/*", "data/*/*/*"]},
+    package_data={"pcrp_core": ["data/*/*"], "pcrp_ros": ["data/*/*"]},
     include_package_data=True,
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),

@@ -121,47 +121,6 @@ def _query(args) -> int:
     return 0
 
 
-def register_eval(sub) -> None:
-    from pcrp_core.evaluation.run import EXPERIMENTS
-    p = sub.add_parser("eval", help="reproduce the paper's experiments on ModelNet40, baselines alongside",
-                       description="Registration, retrieval and pose experiments of the PCRP paper, plus partial views, "
-                                   "a 40-category gallery and rejection, with Open3D's pipelines run alongside. Writes "
-                                   "RESULTS.md, results.json and plots to --out. Models are built once into --cache.")
-    p.add_argument("--data", default="../shared/data/modelnet40", help="folder of ModelNet40 category archives")
-    p.add_argument("--out", default="docs/results", help="report folder (default docs/results)")
-    p.add_argument("--seed", type=int, default=0, help="seed of every random motion, cut and viewpoint (default 0)")
-    p.add_argument("--per-category", type=int, default=None,
-                   help="test objects per category, evenly spread (default: all 100)")
-    p.add_argument("--quick", action="store_true", help="a small subset and small models: a couple of minutes")
-    p.add_argument("--experiments", default=",".join(EXPERIMENTS),
-                   help=f"comma-separated subset of {','.join(EXPERIMENTS)} (default all)")
-    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: one per core)")
-    p.add_argument("--cache", default=None, help="where built models are kept (default ~/.cache/pcrp/eval)")
-    p.set_defaults(func=_eval)
-
-
-def _eval(args) -> int:
-    import os
-    # one thread per worker: the queries run in parallel, one per core
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
-    from pcrp_core.evaluation.run import EXPERIMENTS, Settings, run, write
-
-    chosen = [e.strip() for e in args.experiments.split(",") if e.strip()]
-    unknown = sorted(set(chosen) - set(EXPERIMENTS))
-    if unknown:
-        return _fail(f"unknown experiments {', '.join(unknown)}; choose from {', '.join(EXPERIMENTS)}")
-    settings = Settings(args.data, args.out, args.seed, args.per_category, args.quick, args.jobs, args.cache,
-                        chosen, _progress, lambda m: print(m, file=sys.stderr, flush=True))
-    try:
-        res = run(settings)
-    except FileNotFoundError as e:
-        return _fail(str(e))
-    path = write(settings, res)
-    print(f"wrote {path} ({res['seconds']['total'] / 60:.1f} minutes)")
-    return 0
-
-
 def parse_up(text):
     """--up's X,Y,Z as three floats (None when not given); ValueError saying what is expected."""
     if text is None:
@@ -204,7 +163,7 @@ def format_result(r) -> str:
 def build_parser(extensions=()) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="pcrp", description="PCRP point cloud object retrieval and pose estimation")
     sub = parser.add_subparsers(dest="command", required=True)
-    for register in (register_build, register_query, register_eval, *extensions):
+    for register in (register_build, register_query, *extensions):
         register(sub)
     return parser
 

@@ -1,14 +1,12 @@
-"""`pcrp make-bag | process | replay | demo`: the rosbag side of the command line."""
+"""`pcrp make-bag | process | replay`: the rosbag side of the command line."""
 from __future__ import annotations
 
 import json
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-DEMO_BAG = Path(__file__).resolve().parents[1] / "pcrp_core" / "data" / "demo_bag"
 START_NS = 1_700_000_000 * 10**9   # bags start at a fixed time so they are reproducible
 # a level camera's optical frame (x right, y down, z forward) looking at a z-up object standing upright
 LEVEL_CAMERA = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
@@ -265,14 +263,6 @@ def _replay(args) -> int:
     return 0 if n else 1
 
 
-def register_demo(sub) -> None:
-    p = sub.add_parser("demo", help="the node answering the shipped demo bag, live over DDS")
-    p.add_argument("--model", default=None, help="model directory (default: the shipped model)")
-    p.add_argument("--bag", default=str(DEMO_BAG))
-    p.add_argument("--rate-factor", type=float, default=1.0)
-    p.set_defaults(func=lambda a: __import__("pcrp_ros.demo", fromlist=["run"]).run(a.model, a.bag, a.rate_factor))
-
-
 def register(sub) -> None:
-    for r in (register_make_bag, register_process, register_replay, register_demo):
+    for r in (register_make_bag, register_process, register_replay):
         r(sub)

@@ -3,8 +3,11 @@ from __future__ import annotations
 
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
+
+DEMO_BAG = Path(__file__).resolve().parent / "data" / "demo_bag"
 
 
 def run(model_path=None, bag=None, rate_factor=1.0) -> int:
@@ -16,7 +19,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     from std_msgs.msg import String
 
     from pcrp_core import PCRP
-    from pcrp_ros.bag_commands import DEMO_BAG, HEADER, format_row, replay, summary
+    from pcrp_ros.bag_commands import HEADER, format_row, replay, summary
     from pcrp_ros.bags import read_bag
     from pcrp_ros.node import PcrpNode
 
@@ -88,3 +91,11 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
           f"rejected {snap.get('rejected', 0)}, dropped as stale {snap.get('dropped_stale', 0)}")
     print(summary(rows))
     return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("demo", help="the node answering the shipped demo bag, live over DDS")
+    p.add_argument("--model", default=None, help="model directory (default: the shipped model)")
+    p.add_argument("--bag", default=str(DEMO_BAG))
+    p.add_argument("--rate-factor", type=float, default=1.0)
+    p.set_defaults(func=lambda a: run(a.model, a.bag, a.rate_factor))

@@ -4,7 +4,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-MODELNET = Path(__file__).resolve().parents[2] / "shared" / "data" / "modelnet40"
+REPO = Path(__file__).resolve().parents[1]
+MODELNET = REPO.parent / "shared" / "data" / "modelnet40"
 
 
 def modelnet(category: str, split: str = "train", count: int = 10, start: int = 0):

@@ -51,7 +51,7 @@ def test_upright_objects_before_a_level_camera_are_answered_upright_when_told_up
 
 
 def test_a_recording_cut_short_keeps_its_whole_messages(tmp_path):
-    from pcrp_ros.robustness import truncated_bag
+    from tools.robustness import truncated_bag
     mcap, sqlite = tmp_path / "mcap", tmp_path / "sqlite"
     sent = truncated_bag(mcap, "mcap", keep=0.6)
     clouds, truths, problems = read_bag(mcap)
@@ -65,7 +65,7 @@ def test_a_recording_cut_short_keeps_its_whole_messages(tmp_path):
 def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path, capsys):
     import subprocess
     import sys
-    from pcrp_ros.robustness import mixed_bag
+    from tools.robustness import mixed_bag
     bag = tmp_path / "mixed"
     written = mixed_bag(bag)
     clouds, _, problems = read_bag(bag)

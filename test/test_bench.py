@@ -1,6 +1,6 @@
 """The benchmark report says why a target is missed from its own run's figures, not from
 numbers written into its prose."""
-from pcrp_ros.bench import TARGETS, why_unmet
+from tools.bench import TARGETS, why_unmet
 
 
 def _run(eight_under_5, eight_mean):

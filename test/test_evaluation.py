@@ -1,4 +1,4 @@
-"""pcrp eval: the protocols and measures it rests on, and the command end to end on real data."""
+"""python -m tools paper-eval: the protocols and measures it rests on, and the command end to end on real data."""
 import json
 import subprocess
 import sys
@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from helpers import MODELNET, modelnet, rotation_error_deg
-from pcrp_core.evaluation.metrics import chamfer, euler_errors, geodesic_deg, mse_rmse_mae, precision_at_10
-from pcrp_core.evaluation.protocol import make_query, query_rng
+from helpers import MODELNET, REPO, modelnet, rotation_error_deg
+from tools.paper_eval.metrics import chamfer, euler_errors, geodesic_deg, mse_rmse_mae, precision_at_10
+from tools.paper_eval.protocol import make_query, query_rng
 
 
 def test_geodesic_and_euler_errors_measure_known_rotations():
@@ -68,7 +68,7 @@ def test_a_gallery_subset_answers_from_its_own_objects_only(small_model):
 
 
 def test_the_frame_audit_finds_the_axis_turn_between_two_copies_of_an_object():
-    from pcrp_core.evaluation import frames
+    from tools.paper_eval import frames
     from scipy.spatial import cKDTree
     rng = np.random.default_rng(0)
     box = rng.uniform(-1, 1, (frames.POINTS, 3)) * [1.0, 0.4, 0.2]        # three distinct extents
@@ -85,7 +85,7 @@ def test_the_frame_audit_finds_the_axis_turn_between_two_copies_of_an_object():
 
 
 def test_the_long_side_check_tells_which_way_the_labels_lay_an_elongated_object():
-    from pcrp_core.evaluation import frames
+    from tools.paper_eval import frames
     rng = np.random.default_rng(0)
     cube = rng.uniform(-1, 1, (64, 3))
     clouds = np.stack([cube * [1.0, 0.4, 0.3], cube * [0.4, 1.0, 0.3], cube * [1.0, 0.8, 0.3]])
@@ -95,7 +95,7 @@ def test_the_long_side_check_tells_which_way_the_labels_lay_an_elongated_object(
 
 
 def test_the_bar_names_the_labels_bound_and_a_tie_at_the_quarter_turn():
-    from pcrp_core.evaluation import report
+    from tools.paper_eval import report
     errs = lambda mean, median: {"mean": mean, "median": median}
     res = {"pose": {"uniform": {"summary": {
         "car": {"pcrp": errs(70.5, 89.9), "ransac_icp": errs(88.7, 89.8)},
@@ -113,9 +113,10 @@ def test_the_bar_names_the_labels_bound_and_a_tie_at_the_quarter_turn():
 @pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")
 def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
     out = tmp_path / "results"
-    proc = subprocess.run([sys.executable, "-m", "pcrp_ros.cli", "eval", "--quick", "--data", str(MODELNET),
+    proc = subprocess.run([sys.executable, "-m", "tools", "paper-eval", "--quick", "--data", str(MODELNET),
                            "--out", str(out), "--cache", str(tmp_path / "cache")],
-                          capture_output=True, text=True, timeout=900, env={**__import__("os").environ, "TQDM_DISABLE": "1"})
+                          capture_output=True, text=True, timeout=900, env={**__import__("os").environ, "TQDM_DISABLE": "1"},
+                          cwd=REPO)
     assert proc.returncode == 0, proc.stderr[-3000:]
     text = (out / "RESULTS.md").read_text()
     for heading in ("## The bar", "## What the data allows", "## Pose estimation", "### The narrower protocol", "## Partial views",
@@ -132,7 +133,7 @@ def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
     # the held-out check's queries are train objects its model was built without
     from pcrp_core import PCRP
     held = {r["name"] for r in res["holdout"]["rows"]}
-    from pcrp_core.evaluation.protocol import load_split
+    from tools.paper_eval.protocol import load_split
     train = {n for c in ("airplane", "chair", "sofa", "car") for n in load_split(MODELNET, c, "train")[0]}
     assert len(held) == 12 and held <= train
     assert not held & set(PCRP.load(tmp_path / "cache" / "model4_holdout_quick").gallery_ids)
@@ -151,7 +152,7 @@ def test_the_paper_variant_tries_only_the_papers_hypotheses():
     one-sided view with its sensor position (where view hypotheses would join in) every
     hypothesis comes from RANSAC on feature matches."""
     from pcrp_core import PCRP
-    from pcrp_core.evaluation.methods import PAPER_OPTIONS, _prepared
+    from tools.paper_eval.methods import PAPER_OPTIONS, _prepared
     from pcrp_core.pose import PoseOptions, Registrar
     from pcrp_core.sources.procedural import generate_object
     from pcrp_core.sources.views import partial_view

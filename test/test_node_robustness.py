@@ -14,9 +14,9 @@ from std_msgs.msg import Header
 from builtin_interfaces.msg import Time
 
 from pcrp_core import ModelError, PCRP, default_model_path
-from pcrp_ros.bad_clouds import CASES, CaseRunner, accepted, good_cloud
+from tools.bad_clouds import CASES, CaseRunner, accepted, good_cloud
 from pcrp_ros.conversions import xyz_to_pointcloud2
-from pcrp_ros.faults import FAULTS, damaged_copy, handled, try_fault
+from tools.faults import FAULTS, damaged_copy, handled, try_fault
 from pcrp_ros.node import PcrpNode
 
 
@@ -133,7 +133,7 @@ def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
 
 
 def test_a_short_soak_accounts_for_every_cloud(capsys):
-    from pcrp_ros.soak import run
+    from tools.soak import run
     result = run(duration=15.0, rate=5.0, n_topics=2, bad_share=0.3)
     failed = [name for name, ok in result["checks"].items() if not ok]
     assert not failed, (failed, result["per_topic"])

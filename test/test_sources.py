@@ -48,10 +48,24 @@ def test_folders_of_meshes_and_clouds_load_and_broken_files_are_skipped(tmp_path
     ids = sorted(o.gallery_id for o in objs)
     assert ids == ["ball/b1", "box/crate"]
     crate = next(o for o in objs if o.gallery_id == "box/crate")
-    assert crate.points.shape == (300, 3) and crate.points[:, 0].max() == pytest.approx(2.0, abs=1e-3)
+    # a mesh is sampled densely (the build thins it evenly) and kept, to render views from
+    assert crate.points.shape == (1200, 3) and crate.points[:, 0].max() == pytest.approx(2.0, abs=1e-3)
+    assert crate.mesh is not None and len(crate.mesh.triangles) == 12
+    assert next(o for o in objs if o.gallery_id == "ball/b1").mesh is None
     assert "broken.ply" in caplog.text
     with pytest.raises(ValueError, match="not a ModelNet40 archive"):
         load_source(str(tmp_path / "nothing_here"))
+
+
+def test_a_flat_folder_of_meshes_is_one_object_per_file(tmp_path):
+    # as ../shared/data/ycb is laid out: <id>_<name>.ply side by side, no category folders
+    o3d.io.write_triangle_mesh(str(tmp_path / "002_can.ply"), o3d.geometry.TriangleMesh.create_cylinder(0.05, 0.12))
+    o3d.io.write_triangle_mesh(str(tmp_path / "003_box.ply"), o3d.geometry.TriangleMesh.create_box(0.07, 0.16, 0.21))
+    (tmp_path / "README.md").write_text("not an object")
+    objs = load_source(str(tmp_path), n_points=256)
+    assert [(o.gallery_id, o.category) for o in objs] == [("002_can", "002_can"), ("003_box", "003_box")]
+    assert all(o.mesh is not None for o in objs)
+    assert objs[1].points.max(axis=0) == pytest.approx([0.07, 0.16, 0.21], abs=2e-3)
 
 
 @pytest.mark.parametrize("distance", [1.5, 20.0, 1000.0])

@@ -1,24 +1,18 @@
 """Where gallery objects and queries come from: ModelNet40 archives, the user's folders, the generator."""
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
+from pcrp_core.sources.gallery_object import GalleryObject
 
-
-@dataclass(frozen=True)
-class GalleryObject:
-    gallery_id: str
-    category: str
-    points: np.ndarray   # (N, 3) float32, the object's own canonical frame and units
-    up: str | None = None   # which canonical axis is up ("z", "-y", ...), when the source says
+__all__ = ["GalleryObject", "load_source", "load_sources"]
 
 
 def load_source(spec: str, split: str = "train", n_points: int = 1024, seed: int = 0,
                 limit_per_category: int | None = None) -> list[GalleryObject]:
     """`procedural[:N]` (the embedded generator, N per category, default 25), a ModelNet40
-    category archive (`chair.npz`), or a folder with one sub-folder per category."""
+    category archive (`chair.npz`), or a folder of meshes or clouds (one object per file, or one
+    sub-folder per category)."""
     if spec == "procedural" or spec.startswith("procedural:"):
         from pcrp_core.sources.procedural import generate_gallery
 

@@ -1,8 +1,9 @@
-"""The user's own objects: a folder with one sub-folder per category of meshes or clouds.
+"""The user's own objects: a folder of meshes or clouds, one object per file, or of sub-folders,
+one per category.
 
 Meshes (OBJ, PLY with faces, STL, OFF) are sampled to points, area-uniformly; clouds (PLY
 without faces, PCD, XYZ, NPY of shape (N, 3)) are used as they are. Objects are taken as
-pre-aligned, in their own frame and units. Gallery IDs are `<category>/<file stem>`.
+pre-aligned, in their own frame and units (metres, for a robot).
 """
 from __future__ import annotations
 
@@ -11,6 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import open3d as o3d
+
+from pcrp_core.sources.camera import Mesh
+from pcrp_core.sources.gallery_object import GalleryObject
 
 MESH_SUFFIXES = {".obj", ".stl", ".off", ".ply", ".gltf", ".glb"}
 CLOUD_SUFFIXES = {".ply", ".pcd", ".xyz", ".xyzn", ".pts", ".npy"}
@@ -44,22 +48,42 @@ def read_points(path, n_points: int | None = None, seed: int = 0) -> np.ndarray:
     return pts
 
 
-def load_folder(root, n_points: int = 1024, seed: int = 0, limit: int | None = None):
-    from pcrp_core.sources import GalleryObject
+def read_object(path, n_points: int, seed: int = 0) -> tuple[np.ndarray, Mesh | None]:
+    """(points, mesh) of one file: a mesh is kept (a gallery renders what a camera sees of it) and
+    sampled area-uniformly to 4 x n_points, which the build thins evenly; a cloud has no mesh."""
+    path = Path(path)
+    if path.suffix.lower() in MESH_SUFFIXES:
+        mesh = o3d.io.read_triangle_mesh(str(path))
+        if len(mesh.triangles) > 0:
+            o3d.utility.random.seed(seed)
+            points = np.asarray(mesh.sample_points_uniformly(4 * n_points).points)
+            return points, Mesh(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.triangles, dtype=np.int64))
+    return read_points(path, n_points, seed), None
 
+
+def _usable(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in MESH_SUFFIXES | CLOUD_SUFFIXES)
+
+
+def load_folder(root, n_points: int = 1024, seed: int = 0, limit: int | None = None):
+    """Every mesh or cloud directly in root is an object of its own (ID and category: the file's
+    stem, `025_mug`); each sub-folder is a category of objects (ID `<category>/<file stem>`)."""
     root = Path(root)
+    groups = [(None, _usable(root))]
+    groups += [(d.name, _usable(d)) for d in sorted(p for p in root.iterdir() if p.is_dir())]
     objects = []
-    for cat_dir in sorted(p for p in root.iterdir() if p.is_dir()):
-        files = sorted(p for p in cat_dir.iterdir() if p.is_file() and p.suffix.lower() in MESH_SUFFIXES | CLOUD_SUFFIXES)
-        for f in files[:limit]:
+    for category, files in groups:
+        for f in files if category is None else files[:limit]:
             try:
-                pts = read_points(f, n_points, seed)
+                pts, mesh = read_object(f, n_points, seed)
             except (ValueError, OSError, RuntimeError) as e:
                 log.warning("skipping %s: %s", f, e)
                 continue
-            if len(pts) > n_points:
+            if mesh is None and len(pts) > n_points:
                 pts = pts[np.random.default_rng(seed).choice(len(pts), n_points, replace=False)]
-            objects.append(GalleryObject(f"{cat_dir.name}/{f.stem}", cat_dir.name, pts.astype(np.float32)))
+            gallery_id = f.stem if category is None else f"{category}/{f.stem}"
+            objects.append(GalleryObject(gallery_id, category or f.stem, pts.astype(np.float32), mesh=mesh))
     if not objects:
-        raise ValueError(f"{root}: nothing usable found (expected one sub-folder per category of meshes or clouds)")
+        raise ValueError(f"{root}: nothing usable found (expected mesh or cloud files, one object each, or "
+                         f"sub-folders of them, one per category)")
     return objects

@@ -5,10 +5,10 @@ from pathlib import Path
 
 import numpy as np
 
+from pcrp_core.sources.gallery_object import GalleryObject
+
 
 def load_archive(path, split: str = "train", n_points: int = 1024, seed: int = 0, limit: int | None = None):
-    from pcrp_core.sources import GalleryObject
-
     path = Path(path)
     if split not in ("train", "test"):
         raise ValueError(f"split must be train or test, got {split!r}")

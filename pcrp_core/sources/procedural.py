@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pcrp_core.sources.gallery_object import GalleryObject
 from pcrp_core.sources.primitives import ROT_X, ROT_Z, Box, Cylinder, Ellipsoid, sample_parts
 
 CATEGORIES = ("airplane", "chair", "sofa", "car")
@@ -129,8 +130,6 @@ def generate_object(category: str, seed: int, n_points: int = 1024) -> np.ndarra
 
 def generate_gallery(n_per_category: int, seed: int = 0, n_points: int = 1024, split: str = "train",
                      categories=CATEGORIES):
-    from pcrp_core.sources import GalleryObject
-
     offset = TEST_SEED_OFFSET if split == "test" else 0
     objects = []
     for c in categories:

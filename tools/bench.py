@@ -1,4 +1,4 @@
-"""`pcrp bench`: how fast, how big, how it scales. Writes docs/results/BENCHMARKS.md and
+"""`python -m tools bench`: how fast, how big, how it scales. Writes docs/results/BENCHMARKS.md and
 benchmarks.json; figures come from this machine, on the commands' own runs.
 
 Parts, each its own function so a reader can rerun one: the machine; building the
@@ -146,7 +146,7 @@ def _eight_candidates(model):
 
 
 def _paper(model):
-    from pcrp_core.evaluation.methods import paper_variant
+    from tools.paper_eval.methods import paper_variant
     return paper_variant(model)
 
 
@@ -161,7 +161,7 @@ def bench_queries(model_path: str, data: Path, n: int, n_points: int, seed: int,
     the gallery object PCRP retrieved, its FPFH computed once beforehand as an Open3D user would);
     with variants, also the configurations in VARIANTS."""
     from pcrp_core import PCRP
-    from pcrp_core.evaluation.metrics import geodesic_deg
+    from tools.paper_eval.metrics import geodesic_deg
     model = PCRP.load(model_path)
     queries = query_set(data, n, n_points, seed)
     wrap = progress or (lambda it, **_: it)
@@ -169,7 +169,7 @@ def bench_queries(model_path: str, data: Path, n: int, n_points: int, seed: int,
     rows = {"pcrp": {"seconds": [], "errors": []}}
     o3d_runs = {}
     if baselines:
-        from pcrp_core.evaluation.open3d_pipelines import OPEN3D_PIPELINES, prepare_target
+        from tools.paper_eval.open3d_pipelines import OPEN3D_PIPELINES, prepare_target
         o3d_runs = {name: {"seconds": [], "errors": []} for name in OPEN3D_PIPELINES}
         targets = {}
     model.estimate(queries[0][2])  # warm caches and imports outside the timings
@@ -229,9 +229,9 @@ def queries_in_subprocess(model_path, data, n, n_points, seed, single_thread: bo
         env.update({v: "1" for v in THREAD_VARS})
     with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as f:
         out = Path(f.name)
-    cmd = [sys.executable, "-m", "pcrp_ros.bench", "_queries", str(model_path), str(data), str(n), str(n_points),
+    cmd = [sys.executable, "-m", "tools.bench", "_queries", str(model_path), str(data), str(n), str(n_points),
            str(seed), "1" if baselines else "0", "1" if variants else "0", str(out)]
-    r = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    r = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=Path(__file__).resolve().parents[1])
     if r.returncode:
         raise RuntimeError(f"query benchmark failed: {r.stderr[-2000:]}")
     result = json.loads(out.read_text())
@@ -286,7 +286,7 @@ def bench_scale(data: Path, sizes, seed: int, n_queries: int = 20, progress=prin
 
 # -- the node -------------------------------------------------------------------------------------------------
 def bench_node(model_path: str | None, topic_counts, duration: float, rate: float, processes=(1,), progress=print) -> list:
-    from pcrp_ros import soak
+    from tools import soak
     rows = []
     for n in topic_counts:
         for k in processes if n == max(topic_counts) else (1,):
@@ -462,7 +462,7 @@ def _bench(args) -> int:
     res["verdicts"] = verdicts(res)
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
-    command = "pcrp bench" + (" --quick" if quick else "")
+    command = "python -m tools bench" + (" --quick" if quick else "")
     (out_dir / "BENCHMARKS.md").write_text(report(res, command))
     (out_dir / "benchmarks.json").write_text(json.dumps(res, indent=1, default=str))
     print(f"wrote {out_dir / 'BENCHMARKS.md'}")
@@ -477,8 +477,8 @@ def main(argv=None) -> int:
                           variants=variants == "1")
         Path(out).write_text(json.dumps(r))
         return 0
-    from pcrp_ros.cli import main as cli_main
-    return cli_main(["bench", *argv])
+    from tools.__main__ import main as tools_main
+    return tools_main(["bench", *argv])
 
 
 if __name__ == "__main__":

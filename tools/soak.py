@@ -3,7 +3,7 @@ steady rate, then held to account: every cloud sent is received, every bad one r
 its reason, every good one answered, refused for fit or dropped as stale, memory flat, no
 crash, and a clean exit on Ctrl-C.
 
-`pcrp soak` runs it (10 minutes, 4 topics, 10 Hz by default); the test suite runs a short one.
+`python -m tools soak` runs it (10 minutes, 4 topics, 10 Hz by default); the test suite runs a short one.
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pcrp_ros.bad_clouds import CASES, GoodCloud, good_cloud
+from tools.bad_clouds import CASES, GoodCloud, good_cloud
 
 NODE_NAME = "pcrp_soak_node"
 

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pcrp_core.evaluation import frames, pose_table, registration_table, retrieval_table
-from pcrp_core.evaluation.metrics import geodesic_deg
-from pcrp_core.evaluation.protocol import INSTANCE_NOISE, PAPER_CATEGORIES, PLANE_KEEP, VIEW_NOISE, VIEWS
+from tools.paper_eval import frames, pose_table, registration_table, retrieval_table
+from tools.paper_eval.metrics import geodesic_deg
+from tools.paper_eval.protocol import INSTANCE_NOISE, PAPER_CATEGORIES, PLANE_KEEP, VIEW_NOISE, VIEWS
 
 # The paper's figures (Kadam, Zhou, Liu, Kuo), as the issue quotes them.
 PAPER_REGISTRATION = {"rotation": {"mse": 2.68, "rmse": 1.64, "mae": 0.33},
@@ -298,8 +298,8 @@ def cdf_plot(res: dict, path: Path) -> bool:
 def examples_plot(res: dict, s, path: Path) -> bool:
     """One query per category (uniform rotation, default method), with the retrieved object moved
     onto it by the estimated pose."""
-    from pcrp_core.evaluation.models import category_model
-    from pcrp_core.evaluation.protocol import queries
+    from tools.paper_eval.models import category_model
+    from tools.paper_eval.protocol import queries
     model_path = res.get("model4", {}).get("path")
     if not model_path or "pose" not in res:
         return False
@@ -332,7 +332,7 @@ def write_report(s, res: dict) -> Path:
     flags = ("" if res["per_category"] is None or res["quick"] else f" --per-category {res['per_category']}") + \
         (" --quick" if res["quick"] else "")
     lines = ["# Evaluation on ModelNet40: the paper's experiments, the baselines beside them", "",
-             f"Regenerate with `pcrp eval --data ../shared/data/modelnet40 --out docs/results --seed {res['seed']}"
+             f"Regenerate with `python -m tools paper-eval --data ../shared/data/modelnet40 --out docs/results --seed {res['seed']}"
              f"{flags}`. Run {res['date']} on {res['machine']['cores']} cores "
              f"({res['machine']['cpu']}), {sec.get('total', 0) / 60:.0f} minutes in all"
              f"{' (with models built by an earlier run)' if None in sec.values() else ''}. Test objects per category: "

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pcrp_core.evaluation import open3d_pipelines as o3d_pipes
-from pcrp_core.evaluation.methods import PAPER_OPTIONS, open3d_pose, register_pair, timed
-from pcrp_core.evaluation.metrics import euler_errors, mse_rmse_mae
+from tools.paper_eval import open3d_pipelines as o3d_pipes
+from tools.paper_eval.methods import PAPER_OPTIONS, open3d_pose, register_pair, timed
+from tools.paper_eval.metrics import euler_errors, mse_rmse_mae
 from pcrp_core.pose import PoseOptions
 
 METHODS = {

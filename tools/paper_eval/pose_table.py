@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from pcrp_core.evaluation import open3d_pipelines as o3d_pipes
-from pcrp_core.evaluation.methods import open3d_pose, paper_variant, timed
-from pcrp_core.evaluation.metrics import geodesic_deg, rotation_summary
-from pcrp_core.evaluation.models import category_model, loaded
+from tools.paper_eval import open3d_pipelines as o3d_pipes
+from tools.paper_eval.methods import open3d_pose, paper_variant, timed
+from tools.paper_eval.metrics import geodesic_deg, rotation_summary
+from tools.paper_eval.models import category_model, loaded
 
 METHODS = {
     "pcrp": "PCRP, this package's defaults (16 candidates verified, half turns, ICP)",

@@ -19,8 +19,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from pcrp_core.evaluation.metrics import geodesic_deg
-from pcrp_core.evaluation.protocol import load_split
+from tools.paper_eval.metrics import geodesic_deg
+from tools.paper_eval.protocol import load_split
 from pcrp_core.hypotheses import AXIS_ROTATIONS
 
 ELONGATED = 1.5                 # long side / short side: which side is longer is then the object's, not noise

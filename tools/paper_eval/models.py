@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pcrp_core.evaluation.protocol import load_split
+from tools.paper_eval.protocol import load_split
 from pcrp_core.pipeline import PCRP
 from pcrp_core.sources import load_sources
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from pcrp_core.evaluation.metrics import chamfer, precision_at_10
+from tools.paper_eval.metrics import chamfer, precision_at_10
 from pcrp_core.features.fpfh import fpfh, oriented_normals
 from pcrp_core.vlad import VLAD
 

@@ -1,4 +1,4 @@
-"""`pcrp robustness`: regenerate docs/results/ROBUSTNESS.md, what the node did with every bad
+"""`python -m tools robustness`: regenerate docs/results/ROBUSTNESS.md, what the node did with every bad
 input, broken model file and damaged bag we could think of, and the soak figures.
 
 Every row comes from running the real thing (the node over DDS, the node and CLI as
@@ -109,7 +109,7 @@ def _published(stdout: str) -> int:
 # -- running the catalogues -----------------------------------------------------------------------------
 def run_cases(model) -> list[tuple]:
     import rclpy
-    from pcrp_ros.bad_clouds import CASES, CaseRunner, accepted, good_cloud
+    from tools.bad_clouds import CASES, CaseRunner, accepted, good_cloud
     from pcrp_ros.node import PcrpNode
     from pcrp_ros.spinning import ros_context, spinning
 
@@ -129,7 +129,7 @@ def run_cases(model) -> list[tuple]:
 
 
 def run_faults(model_dir: Path, work: Path) -> list[tuple]:
-    from pcrp_ros.faults import FAULTS, handled, try_fault
+    from tools.faults import FAULTS, handled, try_fault
 
     cloud = work / "cloud.npy"
     np.save(cloud, np.random.default_rng(0).normal(size=(500, 3)))
@@ -144,13 +144,13 @@ def run_faults(model_dir: Path, work: Path) -> list[tuple]:
 
 # -- the report ------------------------------------------------------------------------------------------
 def _allowed(case) -> str:
-    from pcrp_ros.bad_clouds import ANSWERED, ANY_ANSWER
+    from tools.bad_clouds import ANSWERED, ANY_ANSWER
     names = {ANSWERED: "answered right", ANY_ANSWER: "answered"}
     return " or ".join(names.get(a, a.replace("rejected:", "refused: ")) for a in sorted(case.allowed))
 
 
 def _outcome(out) -> str:
-    from pcrp_ros.bad_clouds import ANSWERED, ANY_ANSWER
+    from tools.bad_clouds import ANSWERED, ANY_ANSWER
     if out.outcome == ANSWERED:
         return f"answered right ({out.gallery_id}, {out.rotation_error:.1f}°)"
     if out.outcome == ANY_ANSWER:
@@ -163,7 +163,7 @@ def _short(path_text: str, work: Path) -> str:
 
 
 def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: str) -> Path:
-    from pcrp_ros import soak as soak_mod
+    from tools import soak as soak_mod
     out_dir.mkdir(parents=True, exist_ok=True)
     lines = [
         "# Robustness: what the node does with bad input, broken files and load",
@@ -246,7 +246,7 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
         lines += [
             f"## Soak: {soak['topics']} topics at {soak['rate_hz']:g} Hz for {soak['duration_s'] / 60:g} minutes",
             "",
-            f"The node as its own process (`pcrp soak`), {soak['bad_share']:.0%} of the clouds bad (the refusals of "
+            f"The node as its own process (`python -m tools soak`), {soak['bad_share']:.0%} of the clouds bad (the refusals of "
             "the first table that are decided on arrival, in turn), the rest good one-sided views of 16 gallery "
             "objects. Latency is from arrival to publication; age from the cloud's stamp to publication. On this "
             "2-core machine one answer takes about 0.8 s, so most clouds are dropped as stale: by design, the node "
@@ -279,9 +279,9 @@ def register(sub) -> None:
 
 def _run(args) -> int:
     from pcrp_core import PCRP, default_model_path
-    from pcrp_ros import soak as soak_mod
+    from tools import soak as soak_mod
 
-    command = "pcrp robustness" + (" --quick" if args.quick else "") + (
+    command = "python -m tools robustness" + (" --quick" if args.quick else "") + (
         f" --soak-duration {args.soak_duration:g}" if args.soak_duration != 600 and not args.quick else "")
     model = PCRP.load(None)
     work = Path(tempfile.mkdtemp(prefix="pcrp_robustness_"))

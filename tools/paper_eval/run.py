@@ -1,4 +1,4 @@
-"""`pcrp eval`: every experiment of the report, run from one seed, results to JSON and markdown."""
+"""`python -m tools paper-eval`: every experiment of the report, run from one seed, results to JSON and markdown."""
 from __future__ import annotations
 
 import json
@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pcrp_core.evaluation import frames, pose_table, registration_table, retrieval_table
-from pcrp_core.evaluation.models import ensure_model, held_out, loaded
-from pcrp_core.evaluation.protocol import (INSTANCE_NOISE, PAPER_CATEGORIES, VIEWS, load_split, make_query, queries,
+from tools.paper_eval import frames, pose_table, registration_table, retrieval_table
+from tools.paper_eval.models import ensure_model, held_out, loaded
+from tools.paper_eval.protocol import (INSTANCE_NOISE, PAPER_CATEGORIES, VIEWS, load_split, make_query, queries,
                                            query_rng)
 from pcrp_core.parallel import parallel_map
 
@@ -247,7 +247,7 @@ def run(s: Settings) -> dict:
 
 
 def write(s: Settings, res: dict) -> Path:
-    from pcrp_core.evaluation import report
+    from tools.paper_eval import report
     s.out.mkdir(parents=True, exist_ok=True)
     (s.out / "results.json").write_text(json.dumps(res, indent=1, default=float))
     return report.write_report(s, res)

@@ -2,7 +2,7 @@
 
 Each fault damages a copy of a good model directory the way a disk, a download or a person
 might. Both programs must stop with one error line naming the file and the problem and a
-non-zero exit, never a traceback. Shared by the test suite and `pcrp robustness`.
+non-zero exit, never a traceback. Shared by the test suite and `python -m tools robustness`.
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """What a segmenter may send: a catalogue of bad (and oddly encoded good) PointCloud2 messages,
 each with what the node is allowed to do with it, and a runner that feeds them to a live node.
 
-The same catalogue drives the test suite and `pcrp robustness`, so every row of
+The same catalogue drives the test suite and `python -m tools robustness`, so every row of
 docs/results/ROBUSTNESS.md is also a passing test. Each case is built from one good cloud: what
 a depth camera sees of a gallery object, in the camera's optical frame (z forward).
 """
