@@ -85,7 +85,8 @@ def register_query(sub) -> None:
     p.add_argument("cloud", help="cloud file: PLY, PCD, XYZ or NPY (N, 3); meshes are sampled")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--candidates", type=int, default=None, help="gallery objects to verify (n_candidates)")
-    p.add_argument("--min-score", type=float, default=None, help="reject below this fit score")
+    p.add_argument("--min-confidence", type=float, default=None, help="reject answers less confident than this")
+    p.add_argument("--min-score", type=float, default=None, dest="min_confidence", help=argparse.SUPPRESS)
     p.add_argument("--up", default=None, metavar="X,Y,Z",
                    help="which way is up in the cloud's frame, if known: answers then keep the object upright "
                         "within --up-tolerance")
@@ -106,11 +107,11 @@ def _query(args) -> int:
         points = read_points(args.cloud)
     except (OSError, ValueError) as e:
         return _fail(f"{args.cloud}: {e}")
-    opts = {k: v for k, v in (("n_candidates", args.candidates), ("min_score", args.min_score),
+    opts = {k: v for k, v in (("n_candidates", args.candidates), ("min_confidence", args.min_confidence),
                               ("up_tolerance_deg", args.up_tolerance)) if v is not None}
     try:
         up = parse_up(args.up)
-        model.set_options(**opts)
+        model.set_params(**opts)
         result = model.estimate(points, up=up)
     except (InvalidCloud, ValueError) as e:
         return _fail(f"{args.cloud}: {e}")
@@ -149,6 +150,7 @@ def format_result(r) -> str:
 
     rows = [f"gallery_id  {r.gallery_id}", f"category    {r.category}",
             f"status      {'REJECTED: ' + r.reason if r.rejected else 'accepted'}",
+            f"confidence  {r.confidence:.3f}",
             f"score       {r.score:.3f} (fitness {r.fitness:.3f}, inlier rmse {r.inlier_rmse:.4g}, chamfer {r.chamfer:.4f})",
             f"scale       {r.scale:.4f}",
             "rotation    " + np.array2string(np.asarray(r.rotation), precision=4, suppress_small=True,

@@ -11,8 +11,8 @@ one-sided view looks smaller than the object).
 from __future__ import annotations
 
 import copy
-
 import time
+import warnings
 from collections import OrderedDict
 from pathlib import Path
 
@@ -24,14 +24,14 @@ from pcrp_core.parallel import object_features, parallel_map, view_vectors
 from pcrp_core.timing import Clock
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
-from pcrp_core.pose import PoseOptions, Prepared, Registrar, prepare
+from pcrp_core.config import USER_POSE_SETTINGS, PoseOptions, QueryOptions
+from pcrp_core.pose import Prepared, Registrar, prepare
 from pcrp_core.preprocess import check_geometry, downsample, finite_points
 from pcrp_core.result import PoseResult
 from pcrp_core.visibility import sphere_directions
 from pcrp_core.vlad import VLAD
 
 DEFAULT_MODEL = Path(__file__).parent / "data" / "default_model"
-SCALE_MODES = ("metric", "normalize")
 
 
 def default_model_path() -> Path:
@@ -70,20 +70,6 @@ def _common_up(objects) -> np.ndarray | None:
     return np.array(ups.pop()) if len(ups) == 1 and None not in ups else None
 
 
-class _PoseOption:
-    """A runtime option of the model that lives in its pose_options, so set_options (and the
-    node's parameters) set it by name like the model's own."""
-
-    def __set_name__(self, owner, name):
-        self.name = name
-
-    def __get__(self, model, owner=None):
-        return self if model is None else getattr(model.pose_options, self.name)
-
-    def __set__(self, model, value):
-        setattr(model.pose_options, self.name, type(getattr(PoseOptions, self.name))(value))
-
-
 def _rms_radius(points: np.ndarray) -> float:
     return float(np.sqrt(((points - points.mean(0)) ** 2).sum(1).mean()))
 
@@ -91,9 +77,9 @@ def _rms_radius(points: np.ndarray) -> float:
 class PCRP:
     """A gallery of pre-aligned objects and the unsupervised models fitted on it.
 
-    Runtime options (plain attributes, validated by `set_options`): n_candidates (gallery
-    objects registered and verified per query; 1 is the paper), min_score (reject below this
-    fit score), refine (ICP), min_points, max_points, scale_mode, seed.
+    Settings (pcrp_core.config): `options` (QueryOptions: what is done with each cloud) and
+    `pose_options` (PoseOptions: how poses are found), both immutable; change them with
+    `set_params` (this model) or `with_options` (a variant sharing this model's gallery).
     """
 
     def __init__(self, pointhop: PointHop, vlad: VLAD, gallery: Gallery, unit: float, meta: dict | None = None,
@@ -104,45 +90,41 @@ class PCRP:
         self.unit = float(unit)
         self.meta = dict(meta or {})
         self.n_points = int(n_points)
+        self.options = QueryOptions(max_points=self.n_points)
         self.pose_options = PoseOptions()
-        self.n_candidates = 16
-        self.n_matched = 2
-        self.min_score = 0.5
-        self.min_points = 32
-        self.max_points = self.n_points
-        self.scale_mode = "metric"
-        self.seed = 0
-        self.cache_size = 256
         self._cache: OrderedDict[tuple, Prepared] = OrderedDict()
         self._radii = np.array([_rms_radius(c) for c in gallery.clouds]) if len(gallery) else np.zeros(0)
 
-    # -- options --------------------------------------------------------------------------------
-    refine = _PoseOption()
-    up_tolerance_deg = _PoseOption()
+    # -- settings -------------------------------------------------------------------------------
+    def get_params(self) -> dict:
+        """The user's settings (QueryOptions and USER_POSE_SETTINGS) and their values."""
+        return {**{k: getattr(self.options, k) for k in self.options.__dataclass_fields__},
+                **{k: getattr(self.pose_options, k) for k in USER_POSE_SETTINGS}}
 
-    def set_options(self, **options) -> None:
-        """Set runtime options, refusing invalid values with a ValueError that says why."""
-        checks = {
-            "n_candidates": lambda v: isinstance(v, int) and 1 <= v <= 50,
-            "n_matched": lambda v: isinstance(v, int) and 1 <= v <= 50,
-            "min_score": lambda v: isinstance(v, (int, float)) and 0.0 <= v <= 1.0,
-            "refine": lambda v: isinstance(v, bool),
-            "min_points": lambda v: isinstance(v, int) and 8 <= v,
-            "max_points": lambda v: isinstance(v, int) and 64 <= v <= 100_000,
-            "scale_mode": lambda v: v in SCALE_MODES,
-            "seed": lambda v: isinstance(v, int),
-            "up_tolerance_deg": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and 0.0 < v <= 180.0,
-        }
-        for name, value in options.items():
-            if name not in checks:
-                raise ValueError(f"unknown option {name!r}; known: {sorted(checks)}")
-            if not checks[name](value):
-                raise ValueError(f"invalid value {value!r} for option {name}")
-        merged = {"min_points": self.min_points, "max_points": self.max_points, **options}
-        if merged["min_points"] > merged["max_points"]:
-            raise ValueError("min_points must not exceed max_points")
-        for name, value in options.items():
-            setattr(self, name, value)
+    def _options_with(self, changes: dict) -> tuple[QueryOptions, PoseOptions]:
+        changes = dict(changes)
+        if "min_score" in changes:
+            warnings.warn("min_score is now min_confidence (a calibrated probability that the answer is right); "
+                          "min_score is taken as min_confidence", DeprecationWarning, stacklevel=3)
+            changes.setdefault("min_confidence", changes.pop("min_score"))
+            changes.pop("min_score", None)
+        pose = {k: changes.pop(k) for k in list(changes) if k in USER_POSE_SETTINGS}
+        return self.options.replace(**changes), self.pose_options.replace(**pose)
+
+    def set_params(self, **changes) -> "PCRP":
+        """Change settings by name (ValueError saying why for an unknown name or a bad value, and
+        then nothing changes). A cloud being answered meanwhile keeps the settings it started with."""
+        self.options, self.pose_options = self._options_with(changes)
+        return self
+
+    def with_options(self, pose: PoseOptions | None = None, **changes) -> "PCRP":
+        """A variant of this model with other settings, sharing its gallery, kernels and cache:
+        pose replaces the pose settings wholesale (e.g. config.PAPER_POSE), changes set others."""
+        variant = copy.copy(self)
+        if pose is not None:
+            variant.pose_options = pose
+        variant.options, variant.pose_options = variant._options_with(changes)
+        return variant
 
     # -- gallery access -------------------------------------------------------------------------
     @property
@@ -173,10 +155,7 @@ class PCRP:
         gallery = Gallery([g.ids[i] for i in keep], [g.categories[i] for i in keep], [g.clouds[i] for i in keep],
                           g.vectors[rows], remap[g.owners[rows]])
         model = PCRP(self.pointhop, self.vlad, gallery, self.unit, self.meta, self.n_points)
-        model.pose_options = copy.deepcopy(self.pose_options)
-        for name in ("n_candidates", "n_matched", "min_score", "min_points", "max_points", "scale_mode", "seed",
-                     "cache_size"):
-            setattr(model, name, getattr(self, name))
+        model.options, model.pose_options = self.options, self.pose_options
         return model
 
     # -- building -------------------------------------------------------------------------------
@@ -270,20 +249,20 @@ class PCRP:
         """The cloud as estimate() will use it: finite, at most max_points, checked for geometry a
         pose can be read from (raises InvalidCloud otherwise). Cheap; a stream can call it on
         arrival, to refuse bad clouds at once and queue only usable ones."""
-        return self._clean(points)
+        return self._clean(points, self.options)
 
-    def _clean(self, points) -> np.ndarray:
+    def _clean(self, points, opts: QueryOptions) -> np.ndarray:
         pts = finite_points(points)
         if len(np.asarray(points).reshape(-1, 3)) == 0:
             raise InvalidCloud("empty", "the cloud has no points")
         if len(pts) == 0:
             raise InvalidCloud("no_finite_points", "the cloud has no finite points")
         n_finite = len(pts)
-        pts = downsample(pts, min(self.max_points, self.n_points), self.seed)
-        if len(pts) < self.min_points <= n_finite:
+        pts = downsample(pts, min(opts.max_points, self.n_points), opts.seed)
+        if len(pts) < opts.min_points <= n_finite:
             raise InvalidCloud("too_few_points", f"only {len(pts)} distinct points among {n_finite}, "
-                                                 f"at least {self.min_points} needed")
-        check_geometry(pts, self.min_points)
+                                                 f"at least {opts.min_points} needed")
+        check_geometry(pts, opts.min_points)
         return pts
 
     def _describe(self, normed: np.ndarray, viewpoint=None, timings: dict | None = None):
@@ -305,7 +284,7 @@ class PCRP:
         normed = (cloud - cloud.mean(0)) / self.unit
         prep = prepare(normed, *self.pointhop.transform(normed)) if features else prepare(normed)
         self._cache[key] = prep
-        while len(self._cache) > self.cache_size:
+        while len(self._cache) > self.options.cache_size:
             self._cache.popitem(last=False)
         return prep
 
@@ -332,7 +311,7 @@ class PCRP:
 
     def retrieve(self, points, k: int = 10, viewpoint=None) -> list[tuple[str, float]]:
         """The k gallery objects whose VLAD vectors are nearest the query's, with distances."""
-        pts = self._clean(points)
+        pts = self._clean(points, self.options)
         _, _, vec = self._describe((pts - pts.mean(0)) / self.unit, self._viewpoint(viewpoint, pts.mean(0)))
         idx, dist = self.gallery.search(vec, k)
         return [(self.gallery.ids[i], float(d)) for i, d in zip(idx, dist)]
@@ -347,14 +326,17 @@ class PCRP:
         of it. None: any orientation.
         """
         t0 = time.perf_counter()
+        # one snapshot of the settings, so a change made meanwhile (a node's parameter) never
+        # mixes into a cloud already being answered
+        opts, pose_opts = self.options, self.pose_options
         timings = {}
         up_pair = None if up is None else (self.check_up(up), self.up_axis)
-        pts = self._clean(points)
+        pts = self._clean(points, opts)
         centre = pts.mean(0)
         # size: how much the query is scaled before anything is computed on it (1 in metric mode;
         # in normalize mode, to the gallery's typical size, then to the first candidate's)
         size = 1.0
-        if self.scale_mode == "normalize":
+        if opts.scale_mode == "normalize":
             size = float(np.median(self._radii)) / max(_rms_radius(pts), 1e-12)
         normed = (pts - centre) * (size / self.unit)
         t1 = time.perf_counter()
@@ -364,18 +346,18 @@ class PCRP:
         sampled, feats, vec = self._describe(normed, vp, timings)
         t2 = time.perf_counter()
         timings["features"] = t2 - t1
-        idx, dist = self.gallery.search(vec, max(10, self.n_candidates))
+        idx, dist = self.gallery.search(vec, max(10, opts.n_candidates))
         t3 = time.perf_counter()
         timings["retrieval"] = t3 - t2
-        rng = np.random.default_rng(self.seed)
+        rng = np.random.default_rng(opts.seed)
         ratio = 1.0
-        if self.scale_mode == "normalize":
+        if opts.scale_mode == "normalize":
             ratio = self._radii[idx[0]] / float(np.median(self._radii))
-        registrar = Registrar(prepare(normed * ratio, sampled, feats), self.pose_options, rng,
+        registrar = Registrar(prepare(normed * ratio, sampled, feats), pose_opts, rng,
                               None if vp is None else vp * ratio, timings, up_pair)
-        top = [int(i) for i in idx[: self.n_candidates]]
-        matched = [self._prepared(i, features=True) for i in top[: self.n_matched]]
-        verifiers = matched + [self._prepared(i, features=False) for i in top[self.n_matched:]]
+        top = [int(i) for i in idx[: opts.n_candidates]]
+        matched = [self._prepared(i, features=True) for i in top[: opts.n_matched]]
+        verifiers = matched + [self._prepared(i, features=False) for i in top[opts.n_matched:]]
         j, h = registrar.best_pose(matched, verifiers, [self.gallery.categories[i] for i in top])
         i = top[j]
         timings["registration"] = time.perf_counter() - t3
@@ -387,12 +369,15 @@ class PCRP:
         scale = 1.0 / k
         t = centre - scale * (R @ (c_g + self.unit * h.t))
         score = h.fitness
-        rejected = score < self.min_score
+        # until a calibrated confidence exists, the fit score stands in for it
+        confidence = score
+        rejected = confidence < opts.min_confidence
         timings["total"] = time.perf_counter() - t0
         return PoseResult(
             gallery_id=self.gallery.ids[i], category=self.gallery.categories[i], rotation=R,
             translation=t, scale=scale, score=score, fitness=h.fitness,
             inlier_rmse=h.rmse * self.unit / k, chamfer=h.chamfer, rejected=rejected,
-            reason=f"fit score {score:.2f} below min_score {self.min_score:.2f}" if rejected else "",
+            confidence=confidence,
+            reason=f"confidence {confidence:.2f} below min_confidence {opts.min_confidence:.2f}" if rejected else "",
             candidates=tuple((self.gallery.ids[j], float(d)) for j, d in zip(idx, dist)),
             timings=timings, n_points=len(pts))

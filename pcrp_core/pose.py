@@ -28,6 +28,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from pcrp_core import hypotheses
+from pcrp_core.config import PoseOptions
 from pcrp_core.registration import fit_quality_batch, icp_batch, icp_symmetric
 from pcrp_core.registration.icp import transform_batch
 from pcrp_core.registration.mirror import gallery_mirror, mirror_plane, snap, trimmed_rms
@@ -60,64 +61,6 @@ def prepare(points: np.ndarray, sampled_idx=None, features=None) -> Prepared:
         return Prepared(points, cKDTree(points))
     sampled = points[sampled_idx]
     return Prepared(points, cKDTree(points), sampled, features, split_halves(sampled))
-
-
-@dataclass
-class PoseOptions:
-    ransac_iterations: int = 500
-    ransac_threshold: float = 0.08
-    symmetry_split: bool = True
-    pca_hypotheses: bool = True
-    pca_seeds: int = 4
-    flips: bool = True
-    refine: bool = True
-    consensus: bool = True
-    consensus_weight: float = 0.5
-    exact_ratio: float = 0.8            # a candidate fitting this much better than all others is the object
-    # the same for clouds from a sensor (viewpoint given), stricter: a partial cloud can fit a
-    # wrong turn of one relative closely, where whole clouds cannot
-    exact_ratio_view: float = 0.65
-    seeders: int = 0                    # top candidates that seed hypotheses (0: all; at least those matched)
-    pool_size: int = 6
-    # whole clouds only (no viewpoint): the gallery object's points far from the posed query count
-    # against the pose, untrimmed, since what is missing is the evidence: a chair turned back to
-    # front puts its legs where the back should be, and a trimmed mean drops exactly those points
-    reverse_weight: float = 0.5
-    reverse_trim: float = 1.0
-    visibility_weight: float = 1.0
-    coarse_icp_iterations: int = 6
-    vote_icp_iterations: int = 6        # ICP per hypothesis and candidate before the vote
-    icp_tolerance: float = 1e-6         # stop once the trimmed mean squared error gains less
-    pca_prefilter: int = 64             # points that rank the 24 PCA axis maps first (0: all of them)
-    average_within: float = 1.15       # candidates fitting within this factor of the best are averaged
-    # whole clouds only: the averaged candidates are refined once more with matches taken both ways
-    symmetric_iterations: int = 20
-    symmetric_reverse_trim: float = 0.9   # the gallery side trimmed less: what it has and the query lacks is the evidence
-    # whole clouds only: when the chosen gallery object is mirror-symmetric about a coordinate
-    # plane, the query's own mirror plane is laid on it (registration/mirror.py), if the query is
-    # as symmetric (residuals in point spacings), that turns it by at most mirror_max_deg, and
-    # the query fits its mirror image more tightly than it fits the gallery object
-    mirror_snap: bool = True
-    mirror_tolerance: float = 1.1
-    mirror_max_deg: float = 5.0
-    icp_iterations: int = 20
-    icp_trim: float = 0.8
-    icp_points: int = 256
-    coarse_points: int = 256
-    inlier_distance: float = 0.05
-    # with a known up direction (estimate(up=...)): hypotheses tipping the gallery object's up axis
-    # further than this from it are dropped. Wide, since objects lean and rest on their sides too;
-    # what it removes are the upside-down and lying-down turns of near-symmetric shapes.
-    up_tolerance_deg: float = 60.0
-    upright_turns: int = 12             # turns about the vertical tried when nothing else is upright
-    # clouds from a sensor: the first view_seeders candidates also get the view_keep best of
-    # view_directions x view_rolls poses placing the sensor around them (hypotheses.view_seeds),
-    # ranked on view_prefilter points. Few candidates suffice: a right pose of one is checked on all.
-    view_seeders: int = 4
-    view_directions: int = 20
-    view_rolls: int = 12
-    view_keep: int = 2
-    view_prefilter: int = 32
 
 
 @dataclass

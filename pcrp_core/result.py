@@ -20,6 +20,7 @@ class PoseResult:
     translation: np.ndarray       # (3,), in the query's units
     scale: float = 1.0            # query size / gallery object size
     score: float = 0.0            # fit after alignment in [0, 1], higher is better
+    confidence: float = 0.0       # how likely the answer is right, in [0, 1]
     fitness: float = 0.0          # share of query points near the aligned gallery object
     inlier_rmse: float = float("inf")  # RMS distance of those points, query units
     chamfer: float = float("inf")      # symmetric-free one-way chamfer, query -> gallery, normalised units
@@ -55,6 +56,7 @@ class PoseResult:
             "scale": float(self.scale),
             "transform": self.transform.tolist(),
             "score": float(self.score),
+            "confidence": float(self.confidence),
             "fitness": float(self.fitness),
             "inlier_rmse": float(self.inlier_rmse),
             "chamfer": float(self.chamfer),

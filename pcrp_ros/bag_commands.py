@@ -118,7 +118,7 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
                     r, row["status"] = None, "rejected: internal_error"
                     print(f"pcrp: {bag}: {c['topic']} @ {row['stamp']}: {type(e).__name__}: {e}", file=sys.stderr)
                 if r is not None:
-                    row.update(status="rejected: low_score" if r.rejected else "ok", gallery_id=r.gallery_id,
+                    row.update(status="rejected: low_confidence" if r.rejected else "ok", gallery_id=r.gallery_id,
                                category=r.category, score=r.score)
                     if not r.rejected:
                         writer.write(f"{c['topic']}/pose", pose_msg(r, hdr), c["timestamp"])

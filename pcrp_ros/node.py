@@ -18,7 +18,7 @@ import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
@@ -28,53 +28,18 @@ from std_msgs.msg import String
 
 from pcrp_core import InvalidCloud, ModelError, PCRP
 from pcrp_ros.conversions import CloudFormatError, aligned_points, detections_msg, pointcloud2_to_xyz, pose_stamped, xyz_to_pointcloud2
+from pcrp_ros.parameters import MODEL_SETTINGS, NodeSettings, descriptor, parameters, ros_value
 from pcrp_ros.stats import StreamStats
-
-# name: (default, description, range or None, read_only)
-PARAMETERS = {
-    "model_path": ("", "Model directory built by `pcrp build`; empty for the shipped default model.", None, True),
-    "input_topics": (["segmented_object"], "PointCloud2 topics of segmented objects, one object per message.", None, True),
-    "min_points": (32, "Clouds with fewer finite points are rejected (reason too_few_points).", (8, 100000), False),
-    "max_points": (1024, "Larger clouds are downsampled to this many points, never refused.", (64, 100000), False),
-    "n_candidates": (16, "Retrieved gallery objects registered and voted on per cloud (1 = the paper; 8 answers ~1.5x faster, less accurately).", (1, 50), False),
-    "min_score": (0.5, "Fit score (share of points on the aligned model) below which a cloud is rejected.", (0.0, 1.0), False),
-    "scale_mode": ("metric", "metric: clouds are in the gallery's units (metres); normalize: clouds of unknown "
-                             "scale are resized to the gallery's, and the estimated scale is dropped from the pose.",
-                   None, False),
-    "refine": (True, "Refine poses with ICP.", None, False),
-    "publish_aligned_model": (True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.", None, False),
-    "sensor_at_origin": (True, "The cloud's frame is the sensor's own (one-sided views seen from its origin); "
-                               "false for complete objects or clouds already in a world frame.", None, False),
-    "up_vector": ([0.0, 0.0, 0.0], "Which way is up (against gravity) in the input clouds' frame, if fixed and known: "
-                                   "[0.0, -1.0, 0.0] for a level camera's optical frame. Answers then keep the object "
-                                   "upright within up_tolerance_deg. [0.0, 0.0, 0.0]: unknown, any orientation.", None, False),
-    "up_tolerance_deg": (60.0, "How far an answer may tip the object from up_vector.", (1.0, 180.0), False),
-    "qos_reliability": ("best_effort", "Input QoS reliability: best_effort (sensor data) or reliable.", None, True),
-    "qos_depth": (2, "Input QoS queue depth.", (1, 100), True),
-    "log_throttle_sec": (5.0, "Least seconds between two log lines of one kind.", (0.0, 3600.0), False),
-}
-MODEL_OPTIONS = ("min_points", "max_points", "n_candidates", "min_score", "scale_mode", "refine", "up_tolerance_deg")
-
-
-def _descriptor(name, default, description, bounds, read_only) -> ParameterDescriptor:
-    d = ParameterDescriptor(name=name, description=description, read_only=read_only)
-    if bounds is not None and isinstance(default, int) and not isinstance(default, bool):
-        d.integer_range = [IntegerRange(from_value=bounds[0], to_value=bounds[1], step=1)]
-    elif bounds is not None:
-        d.floating_point_range = [FloatingPointRange(from_value=float(bounds[0]), to_value=float(bounds[1]), step=0.0)]
-    return d
-
 
 class PcrpNode(Node):
     def __init__(self, model: PCRP | None = None, node_name: str = "pcrp_node", **kwargs):
         super().__init__(node_name, **kwargs)
-        for name, (default, description, bounds, read_only) in PARAMETERS.items():
-            self.declare_parameter(name, default, _descriptor(name, default, description, bounds, read_only))
-        p = {name: self.get_parameter(name).value for name in PARAMETERS}
-        if p["qos_reliability"] not in ("best_effort", "reliable"):
-            raise ValueError(f"qos_reliability must be best_effort or reliable, not {p['qos_reliability']!r}")
+        for spec in parameters():
+            self.declare_parameter(spec["name"], ros_value(spec["default"]), descriptor(spec))
+        p = {spec["name"]: self.get_parameter(spec["name"]).value for spec in parameters()}
+        NodeSettings(**{k: p[k] for k in NodeSettings.__dataclass_fields__})   # ValueError saying which is wrong
         self.model = model if model is not None else PCRP.load(p["model_path"] or None)
-        self.model.set_options(**{k: p[k] for k in MODEL_OPTIONS})
+        self.model.set_params(**{k: p[k] for k in MODEL_SETTINGS})
         self._up = self._checked_up(p["up_vector"])
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
@@ -121,11 +86,11 @@ class PcrpNode(Node):
             raise ValueError(f"up_vector {list(value)!r}: {e}") from None
 
     def _on_set_parameters(self, params) -> SetParametersResult:
-        changes = {p.name: p.value for p in params if p.name in MODEL_OPTIONS}
+        changes = {p.name: p.value for p in params if p.name in MODEL_SETTINGS}
         up = [p.value for p in params if p.name == "up_vector"]
         try:
             new_up = self._checked_up(up[0]) if up else self._up
-            self.model.set_options(**changes)   # validates every value before setting any
+            self.model.set_params(**changes)   # validates every value before setting any
         except ValueError as e:
             return SetParametersResult(successful=False, reason=str(e))
         self._up = new_up
@@ -183,7 +148,7 @@ class PcrpNode(Node):
             self._reject(topic, e.reason, str(e))
             return
         if result.rejected:
-            self._reject(topic, "low_score", result.reason)
+            self._reject(topic, "low_confidence", result.reason)
             return
         pubs = self._pubs[topic]
         pubs["pose"].publish(pose_stamped(result, header))

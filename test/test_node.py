@@ -123,15 +123,14 @@ def test_parameters_are_validated_at_runtime(model):
         assert not bad.successful
         bad = node.set_parameters([Parameter("min_points", value=5000)])[0]
         assert not bad.successful and "min_points" in bad.reason
-        ok = node.set_parameters([Parameter("min_score", value=0.25)])[0]
-        assert ok.successful and model.min_score == 0.25
+        ok = node.set_parameters([Parameter("min_confidence", value=0.25)])[0]
+        assert ok.successful and model.options.min_confidence == 0.25
         ro = node.set_parameters([Parameter("model_path", value="/elsewhere")])[0]
         assert not ro.successful
         node.destroy_node()
 
 
 def test_up_vector_is_validated_and_reaches_the_core(model, monkeypatch):
-    import copy
     with ros_context() as ctx:
         node = PcrpNode(model=model, context=ctx)
         assert node._up is None                                  # [0, 0, 0]: unknown
@@ -143,13 +142,13 @@ def test_up_vector_is_validated_and_reaches_the_core(model, monkeypatch):
             seen.append(kw)
             raise InvalidCloud("empty", "recorded, not answered")
         monkeypatch.setattr(model, "estimate", estimate)
-        monkeypatch.setattr(model.pose_options, "up_tolerance_deg", model.up_tolerance_deg)  # restored after
+        monkeypatch.setattr(model, "pose_options", model.pose_options)  # restored after
         node._answer("segmented_object", Header(), np.zeros((40, 3)), 0.0)
         np.testing.assert_allclose(seen[0]["up"], [0.0, -1.0, 0.0])
         assert node.set_parameters([Parameter("up_tolerance_deg", value=30.0)])[0].successful
-        assert model.up_tolerance_deg == 30.0
+        assert model.pose_options.up_tolerance_deg == 30.0
         node.destroy_node()
-        silent = copy.copy(model)
+        silent = model.with_options()
         silent.meta = {**model.meta, "up_axis": None}
         with pytest.raises(ValueError, match="up axis"):
             PcrpNode(model=silent, context=ctx, parameter_overrides=[Parameter("up_vector", value=[0.0, 0.0, 1.0])])

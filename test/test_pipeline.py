@@ -130,7 +130,7 @@ def test_large_clouds_are_downsampled_and_answered(model):
     rng = np.random.default_rng(2)
     dense = np.repeat(p, 20, axis=0) + rng.normal(scale=1e-3, size=(len(p) * 20, 3))
     r = model.estimate(dense)
-    assert r.gallery_id == gid and r.n_points == model.max_points
+    assert r.gallery_id == gid and r.n_points == model.options.max_points
 
 
 def test_a_gallery_object_seen_by_a_sensor_is_not_outvoted_by_relatives_facing_otherwise():
@@ -166,12 +166,20 @@ def test_unusable_clouds_raise_with_a_reason(model, cloud, reason):
     assert err.value.reason == reason
 
 
-def test_options_are_validated(model):
+def test_settings_are_validated_and_an_invalid_change_changes_nothing(model):
+    before = model.get_params()
     with pytest.raises(ValueError, match="n_candidates"):
-        model.set_options(n_candidates=0)
-    with pytest.raises(ValueError, match="unknown option"):
-        model.set_options(colour="red")
+        model.set_params(n_candidates=0)
+    with pytest.raises(ValueError, match="unknown setting colour"):
+        model.set_params(colour="red")
     with pytest.raises(ValueError, match="min_points must not exceed"):
-        model.set_options(min_points=5000)
-    model.set_options(min_score=0.3)
-    assert model.min_score == 0.3
+        model.set_params(min_points=5000)
+    with pytest.raises(ValueError, match="up_tolerance_deg"):
+        model.set_params(n_candidates=4, up_tolerance_deg=0.0)
+    assert model.get_params() == before
+    variant = model.with_options(min_confidence=0.3, refine=False)
+    assert (variant.options.min_confidence, variant.pose_options.refine) == (0.3, False)
+    assert model.get_params() == before and variant.gallery is model.gallery
+    with pytest.warns(DeprecationWarning, match="min_confidence"):
+        variant = model.with_options(min_score=0.25)
+    assert variant.options.min_confidence == 0.25

@@ -43,7 +43,7 @@ def test_a_million_points_are_downsampled_and_answered_in_bounded_time(model):
     t0 = time.perf_counter()
     r = model.estimate(big)
     assert time.perf_counter() - t0 < 20.0
-    assert r.n_points == model.max_points and r.category == "sofa"
+    assert r.n_points == model.options.max_points and r.category == "sofa"
 
 
 def test_far_from_the_origin_the_pose_is_still_right(model):
@@ -57,11 +57,11 @@ def test_far_from_the_origin_the_pose_is_still_right(model):
 def test_a_cloud_in_millimetres_is_answered_or_rejected_not_crashed(model):
     out = _answer_or_reason(model, model.gallery_cloud("proc_car_0001").astype(np.float64) * 1000.0)
     assert isinstance(out, str) or np.isfinite(out.transform).all()
-    model.set_options(scale_mode="normalize")
+    model.set_params(scale_mode="normalize")
     try:
         r = model.estimate(model.gallery_cloud("proc_car_0001").astype(np.float64) * 1000.0)
     finally:
-        model.set_options(scale_mode="metric")
+        model.set_params(scale_mode="metric")
     assert r.gallery_id == "proc_car_0001" and r.scale == pytest.approx(1000.0, rel=0.01)
 
 

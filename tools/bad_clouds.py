@@ -149,8 +149,8 @@ def _rejected(*reasons):
 
 
 _ANSWER = frozenset({ANSWERED})
-_UNITS = frozenset({ANY_ANSWER, "rejected:low_score"})
-_SHAPELESS = frozenset({ANY_ANSWER, "rejected:low_score", "rejected:degenerate"})
+_UNITS = frozenset({ANY_ANSWER, "rejected:low_confidence"})
+_SHAPELESS = frozenset({ANY_ANSWER, "rejected:low_confidence", "rejected:degenerate"})
 
 CASES = [
     Case("empty", "no points (width 0)", lambda g, h: _msg(np.zeros((0, 3)), h), _rejected("empty")),

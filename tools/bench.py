@@ -141,7 +141,7 @@ def query_set(data: Path, n: int, n_points: int, seed: int):
 
 
 def _eight_candidates(model):
-    model.set_options(n_candidates=8)
+    model.set_params(n_candidates=8)
     return model
 
 

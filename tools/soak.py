@@ -40,7 +40,7 @@ def refused_on_arrival():
     for c in CASES:
         if len(c.allowed) == 1:
             (outcome,) = c.allowed
-            if outcome.startswith("rejected:") and outcome != "rejected:low_score":
+            if outcome.startswith("rejected:") and outcome != "rejected:low_confidence":
                 out.setdefault(outcome.split(":", 1)[1], c)
     return out
 
@@ -209,11 +209,11 @@ def _summarise(topics, sent, diag, poses, rss, alive, code, log, duration, rate,
     per_topic = {}
     checks = {"no crash (alive at the end, exit 0 on Ctrl-C, no traceback)": alive and code == 0 and "Traceback" not in log}
     for t in topics:
-        d = {k: diag.get(t, k) for k in ("received", "answered", "rejected", "dropped_stale", "rejected_low_score",
+        d = {k: diag.get(t, k) for k in ("received", "answered", "rejected", "dropped_stale", "rejected_low_confidence",
                                          "latency_p50_ms", "latency_p95_ms", "age_p50_ms", "age_p95_ms")}
         s = sent[t]
         bad_counted = all(diag.get(t, f"rejected_{k[4:]}") == v for k, v in s.items() if k.startswith("bad_"))
-        good_accounted = d["answered"] + d["rejected_low_score"] + d["dropped_stale"] == s["good"]
+        good_accounted = d["answered"] + d["rejected_low_confidence"] + d["dropped_stale"] == s["good"]
         per_topic[t] = {"sent_good": s["good"], "sent_bad": s["bad"], **d, "poses_seen": poses[t]}
         checks[f"{t}: every cloud sent was received"] = d["received"] == s["good"] + s["bad"]
         checks[f"{t}: every bad cloud counted under its reason"] = bad_counted
@@ -233,9 +233,9 @@ def table(result: dict) -> str:
     rows = ["| topic | good sent | bad sent | received | answered | refused (fit) | refused (bad input) | dropped stale "
             "| latency p50 / p95 ms | age p50 / p95 ms |", "|---|---|---|---|---|---|---|---|---|---|"]
     for t, d in result["per_topic"].items():
-        bad = d["rejected"] - d["rejected_low_score"]
+        bad = d["rejected"] - d["rejected_low_confidence"]
         rows.append(f"| {t} | {d['sent_good']} | {d['sent_bad']} | {d['received']:.0f} | {d['answered']:.0f} "
-                    f"| {d['rejected_low_score']:.0f} | {bad:.0f} | {d['dropped_stale']:.0f} "
+                    f"| {d['rejected_low_confidence']:.0f} | {bad:.0f} | {d['dropped_stale']:.0f} "
                     f"| {d['latency_p50_ms']:.0f} / {d['latency_p95_ms']:.0f} | {d['age_p50_ms']:.0f} / {d['age_p95_ms']:.0f} |")
     rows.append("")
     who = "the node" if result.get("processes", 1) == 1 else f"the {result['processes']} node processes together"

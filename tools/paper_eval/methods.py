@@ -2,27 +2,20 @@
 as (R, t) with p_query = R @ p_gallery + t."""
 from __future__ import annotations
 
-import copy
 import time
 
 import numpy as np
 
-from pcrp_core.pose import PoseOptions, Registrar, prepare
+from pcrp_core.config import PAPER_POSE, PAPER_QUERY, PoseOptions
+from pcrp_core.pose import Registrar, prepare
 
-# The paper's registration: feature matches within the symmetry halves, Procrustes in RANSAC,
-# the best-fitting of those hypotheses; one retrieved object, no principal-axis, half-turn or
-# view hypotheses, no candidate vote, no ICP.
-PAPER_OPTIONS = PoseOptions(pca_hypotheses=False, flips=False, view_seeders=0, refine=False, consensus=False,
-                            seeders=1, reverse_weight=0.0)
+PAPER_OPTIONS = PAPER_POSE
 
 
 def paper_variant(model):
     """The model configured as the paper describes PCRP (top-1 retrieval, no rejection); it
     shares the model's gallery and its cache of prepared gallery objects."""
-    m = copy.copy(model)
-    m.pose_options = copy.deepcopy(PAPER_OPTIONS)
-    m.n_candidates, m.n_matched, m.min_score = 1, 1, 0.0
-    return m
+    return model.with_options(pose=PAPER_POSE, **PAPER_QUERY)
 
 
 def _prepared(pointhop, unit: float, points: np.ndarray):

@@ -183,7 +183,7 @@ def run_rejection(s: Settings, model_path) -> dict:
     outside = s.map(pose_table.pose_one, queries(s.data, OUTSIDE_CATEGORIES, "rejection", s.seed, n), state,
                     "rejection (other categories)")
     model = loaded(model_path)
-    return {"min_score": model.min_score, **pose_table.rejection_summary(inside, outside)}
+    return {"min_score": model.options.min_confidence, **pose_table.rejection_summary(inside, outside)}
 
 
 def run(s: Settings) -> dict:
