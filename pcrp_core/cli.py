@@ -56,6 +56,7 @@ def register_build(sub) -> None:
 def _build(args) -> int:
     from pcrp_core import PCRP
     from pcrp_core.model_io import model_size
+    from pcrp_core.geometry import axis_name
     from pcrp_core.sources import load_sources
 
     t0 = time.perf_counter()
@@ -74,7 +75,7 @@ def _build(args) -> int:
           f"feature dimension {model.pointhop.n_features_}, descriptor dimension {model.gallery.vectors.shape[1]}, "
           f"{time.perf_counter() - t0:.1f} s, {size / 1e6:.2f} MB on disk "
           f"({model.size_report()}); "
-          + (f"up axis {_axis_name(model.up_axis)}" if model.up_axis is not None
+          + (f"up axis {axis_name(model.up_axis)}" if model.up_axis is not None
              else "no up axis recorded (--up-axis to give one)"))
     return 0
 
@@ -133,16 +134,6 @@ def parse_up(text):
     if len(up) != 3:
         raise ValueError(f"--up {text!r}: expected three numbers, e.g. 0,0,1")
     return up
-
-
-def _axis_name(v) -> str:
-    import numpy as np
-    from pcrp_core.pipeline import AXES
-    for name, axis in AXES.items():
-        for sign in ("", "-"):
-            if np.allclose(v, np.array(axis) * (-1 if sign else 1)):
-                return sign + name
-    return ",".join(f"{x:.3f}" for x in v)
 
 
 def format_result(r) -> str:

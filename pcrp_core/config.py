@@ -99,6 +99,9 @@ class QueryOptions(Options):
                               low=64, high=100_000)
     scale_mode: str = setting("metric", "metric: clouds in the gallery's units (metres); normalize: clouds of "
                                         "unknown scale are resized to the gallery's.", choices=("metric", "normalize"))
+    method: str = setting("auto", "views: match known objects view by view (models built from meshes, clouds from "
+                                  "a camera); pcrp: the paper's pipeline; auto: views where it applies, else pcrp.",
+                          choices=("auto", "views", "pcrp"))
     seed: int = setting(0, "Seed of the random choices (sampling, RANSAC), so answers repeat.", low=0)
     cache_size: int = setting(256, "Gallery objects kept prepared for registration between clouds.", low=0)
 
@@ -162,6 +165,26 @@ class PoseOptions(Options):
     view_rolls: int = setting(12, "Rolls about the line of sight per direction.", low=1)
     view_keep: int = setting(2, "View hypotheses kept per candidate.", low=1)
     view_prefilter: int = setting(32, "Points the view hypotheses are ranked on.", low=1)
+
+
+@dataclass(frozen=True)
+class InstanceOptions(Options):
+    """How known objects are matched view by view (pcrp_core/instance): settings for experiments."""
+    shortlist: int = setting(8, "Objects whose views have the query's shape that are looked at further.", low=1)
+    silhouette_poses: int = setting(16, "(view, roll) poses per object from the best-agreeing silhouettes.", low=1)
+    yaw_steps: int = setting(36, "With gravity known: turns about the vertical tried per object.", low=1)
+    score_points: int = setting(48, "Query points the hypotheses are ranked on.", low=8)
+    poses_refined: int = setting(2, "Best hypotheses per object refined by ICP.", low=1)
+    objects_refined: int = setting(5, "Objects, best-ranked first, whose hypotheses are refined and judged.", low=1)
+    coarse_ratio: float = setting(2.0, "Of those, only objects whose best hypothesis costs at most this many times the "
+                                       "best object's.", low=1.0)
+    refine_points: int = setting(384, "Query points ICP uses.", low=16)
+    fit_tolerance: float = setting(0.003, "Least distance, metres, beyond which a point counts as unexplained.",
+                                   low=0.0, low_open=True)
+    unshown_weight: float = setting(1.0, "Cost of an expected surface point missing from the cloud against that of "
+                                          "a cloud point off the object.", low=0.0)
+    noise_tolerance: float = setting(2.5, "That distance as a multiple of the cloud's own range noise, when larger.",
+                                     low=0.0)
 
 
 # the pose settings a user tunes beside QueryOptions (the node's parameters)

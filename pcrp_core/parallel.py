@@ -51,3 +51,16 @@ def view_vectors(state: dict, cloud_and_cameras) -> list[np.ndarray]:
         if len(seen) >= 64:
             out.append(state["vlad"].transform(state["pointhop"].transform(seen, cam)[1]))
     return out
+
+
+def object_templates(state: dict, mesh) -> dict:
+    """What a camera sees of one gallery mesh (instance/templates.py)."""
+    from pcrp_core.instance.templates import object_templates as render
+    return render(mesh, state["settings"], seed=state["seed"])
+
+
+def calibration_answers(state: dict, index_and_scene) -> dict:
+    """One calibration view, answered (instance/calibration.py)."""
+    from pcrp_core.instance.calibration import answer_view
+    index, scene = index_and_scene
+    return answer_view(state["model"], index, scene)

@@ -27,6 +27,7 @@ class PoseResult:
     rejected: bool = False
     reason: str = ""              # why it was rejected; empty when accepted
     candidates: tuple = ()        # retrieval top-k as ((gallery_id, distance), ...)
+    twins: tuple = ()             # gallery objects of the same shape as the answer: no depth camera tells them apart
     timings: dict = field(default_factory=dict)  # seconds per stage, plus "total"
     n_points: int = 0             # points used after cleaning and downsampling
 
@@ -63,6 +64,7 @@ class PoseResult:
             "rejected": bool(self.rejected),
             "reason": self.reason,
             "candidates": [[g, float(d)] for g, d in self.candidates],
+            "twins": list(self.twins),
             "timings": {k: float(v) for k, v in self.timings.items()},
             "n_points": int(self.n_points),
         }

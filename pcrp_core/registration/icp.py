@@ -107,3 +107,21 @@ def icp_symmetric(src: np.ndarray, dst: np.ndarray, dst_tree: cKDTree, R: np.nda
             break
         prev = err
     return R, t
+
+
+def icp_point_to_plane(source, target, R: np.ndarray, t: np.ndarray, stages) -> tuple[np.ndarray, np.ndarray]:
+    """Open3D's point-to-plane ICP (compiled, robust to outliers with a Tukey loss) of the cloud
+    source onto target (an Open3D PointCloud with normals), from the pose that takes target into
+    source's frame (p_source = R @ p_target + t). stages: (max correspondence distance, Tukey
+    width, iterations), coarse to fine. Returns the refined pose, in the same direction."""
+    import open3d as o3d
+
+    reg = o3d.pipelines.registration
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R.T, -R.T @ t          # Open3D moves the source onto the target
+    for distance, width, iterations in stages:
+        T = reg.registration_icp(source, target, distance, T,
+                                 reg.TransformationEstimationPointToPlane(reg.TukeyLoss(k=width)),
+                                 reg.ICPConvergenceCriteria(max_iteration=int(iterations))).transformation
+    Rq, tq = T[:3, :3], T[:3, 3]
+    return Rq.T, -Rq.T @ tq

@@ -99,6 +99,59 @@ class Mesh:
         return np.asarray(m.sample_points_poisson_disk(n, init_factor=5).points)
 
 
+def look_at(position: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(R, t) taking a frame's points into the optical frame of a camera at position looking at
+    target: p_camera = R @ p + t. The roll is arbitrary but fixed (x kept level where it can be)."""
+    z = np.asarray(target, float) - np.asarray(position, float)
+    z = z / np.linalg.norm(z)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x = x / np.linalg.norm(x)
+    R = np.stack([x, np.cross(z, x), z])
+    return R, -R @ np.asarray(position, float)
+
+
+class MeshCamera:
+    """One mesh, ray cast from many camera poses without rebuilding its acceleration structure:
+    the rays are moved into the mesh's frame instead of the mesh into the camera's."""
+
+    def __init__(self, mesh: Mesh, camera: PinholeCamera = PinholeCamera()):
+        import open3d as o3d
+
+        self.mesh, self.camera = mesh, camera
+        self.scene = o3d.t.geometry.RaycastingScene()
+        self.scene.add_triangles(o3d.core.Tensor(mesh.vertices.astype(np.float32)),
+                                 o3d.core.Tensor(mesh.triangles.astype(np.uint32)))
+
+    def _cast(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        import open3d as o3d
+
+        rays = np.concatenate([origins, directions], axis=-1).astype(np.float32)
+        return self.scene.cast_rays(o3d.core.Tensor(rays))['t_hit'].numpy()
+
+    def view(self, R: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """(N, 3) noiseless points the camera at pose (R, t) (mesh to optical frame) measures,
+        in the optical frame."""
+        cam = self.camera
+        box = cam.window(self.mesh.vertices @ R.T + t)
+        if box is None:
+            return np.zeros((0, 3))
+        u0, v0, u1, v1 = box
+        u, v = np.meshgrid(np.arange(u0, u1), np.arange(v0, v1))
+        dirs = np.stack([(u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, np.ones(u.shape)], -1).reshape(-1, 3)
+        depth = self._cast(np.broadcast_to(-R.T @ t, dirs.shape), dirs @ R)
+        hit = np.isfinite(depth)
+        return dirs[hit] * depth[hit, None]
+
+    def sees(self, position: np.ndarray, points: np.ndarray, tolerance: float = 1e-3) -> np.ndarray:
+        """(N,) whether each point on the mesh (mesh frame) is what a camera at position sees
+        along the ray towards it (nothing of the mesh in front of it)."""
+        d = points - position
+        dist = np.linalg.norm(d, axis=1)
+        hit = self._cast(np.broadcast_to(position, d.shape), d / dist[:, None])
+        return hit > dist - tolerance
+
+
 def render_depth(meshes: list[Mesh], camera: PinholeCamera) -> tuple[np.ndarray, np.ndarray]:
     """(depth (H, W) float32, owner (H, W) int32) of meshes already placed in the optical frame:
     depth inf and owner -1 where a ray hits nothing, else the index of the mesh it hits first.

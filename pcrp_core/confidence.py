@@ -1,0 +1,72 @@
+"""A confidence that means what it says: the probability, learnt on validation answers, that an
+answer is right.
+
+What an answer reports about itself (how well the posed object fits, how much better than the
+best other object, how many points it had) is turned into a probability by logistic regression
+fitted on answers whose truth is known: views of the gallery's own objects rendered when the
+model is built (never the views a benchmark reports), asked once with the object in the gallery
+and once with it left out, since a robot also meets objects the gallery does not hold. The
+calibration is stored in the model as plain arrays.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """p(right | features) = sigmoid(coef . (x - mean) / scale + intercept)."""
+    names: tuple
+    mean: np.ndarray
+    scale: np.ndarray
+    coef: np.ndarray
+    intercept: float
+
+    def probability(self, features: dict) -> float:
+        x = np.array([features[n] for n in self.names], dtype=np.float64)
+        z = float(self.coef @ ((x - self.mean) / self.scale) + self.intercept)
+        return float(1.0 / (1.0 + np.exp(-np.clip(z, -50.0, 50.0))))
+
+    def to_arrays(self, prefix: str) -> dict:
+        return {prefix + 'names': np.array(self.names), prefix + 'mean': self.mean, prefix + 'scale': self.scale,
+                prefix + 'coef': self.coef, prefix + 'intercept': np.array(self.intercept)}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict, prefix: str) -> 'Calibration | None':
+        if prefix + 'coef' not in arrays:
+            return None
+        return cls(tuple(str(n) for n in arrays[prefix + 'names']), arrays[prefix + 'mean'].astype(np.float64),
+                   arrays[prefix + 'scale'].astype(np.float64), arrays[prefix + 'coef'].astype(np.float64),
+                   float(arrays[prefix + 'intercept']))
+
+
+def fit_calibration(samples: list[dict], labels, names: tuple, regularisation: float = 1.0) -> Calibration:
+    """Logistic regression of labels (1: the answer was right) on the named features."""
+    from sklearn.linear_model import LogisticRegression
+
+    X = np.array([[s[n] for n in names] for s in samples], dtype=np.float64)
+    y = np.asarray(labels, dtype=int)
+    if len(set(y)) < 2:
+        raise ValueError('calibration needs both right and wrong answers')
+    mean, scale = X.mean(axis=0), X.std(axis=0)
+    scale = np.where(scale > 1e-12, scale, 1.0)
+    lr = LogisticRegression(C=regularisation, max_iter=1000).fit((X - mean) / scale, y)
+    return Calibration(tuple(names), mean, scale, lr.coef_[0].astype(np.float64), float(lr.intercept_[0]))
+
+
+def reliability(confidence, right, bins: int = 10) -> list[tuple[float, float, int]]:
+    """(mean confidence, share right, count) per confidence bin: a reliability diagram."""
+    c, r = np.asarray(confidence, dtype=np.float64), np.asarray(right, dtype=np.float64)
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    which = np.clip(np.digitize(c, edges) - 1, 0, bins - 1)
+    return [(float(c[which == b].mean()), float(r[which == b].mean()), int((which == b).sum()))
+            for b in range(bins) if (which == b).any()]
+
+
+def expected_calibration_error(confidence, right, bins: int = 10) -> float:
+    """Mean gap between confidence and share right over the bins, weighted by their counts."""
+    rows = reliability(confidence, right, bins)
+    n = sum(k for _, _, k in rows)
+    return float(sum(k * abs(c - r) for c, r, k in rows) / max(n, 1))

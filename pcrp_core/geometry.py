@@ -1,0 +1,61 @@
+"""Small geometric facts used across the package, written once."""
+from __future__ import annotations
+
+import numpy as np
+
+AXES = {'x': (1.0, 0.0, 0.0), 'y': (0.0, 1.0, 0.0), 'z': (0.0, 0.0, 1.0)}
+
+
+def rotation_angle_deg(R_a, R_b) -> float:
+    """The geodesic angle between two rotations, in degrees."""
+    c = (np.trace(np.asarray(R_a).T @ np.asarray(R_b)) - 1.0) / 2.0
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+
+
+def angle_deg(a, b) -> float:
+    """The angle between two vectors, in degrees."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    c = a @ b / (np.linalg.norm(a) * np.linalg.norm(b))
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+
+
+def normalised(points: np.ndarray, unit: float, centre=None) -> np.ndarray:
+    """points in a model's normalised units: centred on their centroid (or centre), divided by
+    the model-wide unit, so the features' radii mean the same for every object."""
+    points = np.asarray(points, dtype=np.float64)
+    return (points - (points.mean(axis=0) if centre is None else centre)) / unit
+
+
+def rms_radius(points: np.ndarray) -> float:
+    """Root mean square distance from the centroid: a cloud's size."""
+    return float(np.sqrt(((points - points.mean(axis=0)) ** 2).sum(axis=1).mean()))
+
+
+def unit_vector(v) -> np.ndarray | None:
+    """v scaled to length 1, None unless it is a finite, non-zero 3-vector."""
+    v = np.asarray(v, dtype=np.float64).reshape(-1)
+    n = float(np.linalg.norm(v)) if v.shape == (3,) and np.all(np.isfinite(v)) else 0.0
+    return v / n if n >= 1e-9 else None
+
+
+def unit_axis(axis) -> np.ndarray:
+    """A unit vector from 'x', '-z', ... or three numbers; ValueError otherwise."""
+    if isinstance(axis, str):
+        name = axis.strip().lower()
+        sign = -1.0 if name.startswith('-') else 1.0
+        if name.lstrip('+-') not in AXES:
+            raise ValueError(f'up axis {axis!r}: expected x, y, z, -x, -y or -z')
+        return sign * np.array(AXES[name.lstrip('+-')])
+    v = unit_vector(axis)
+    if v is None:
+        raise ValueError(f'up axis {axis!r}: expected a finite, non-zero 3-vector')
+    return v
+
+
+def axis_name(v) -> str:
+    """'x', '-y', ... for a coordinate axis, else the vector's three numbers."""
+    for name, axis in AXES.items():
+        for sign in (1.0, -1.0):
+            if np.allclose(v, np.array(axis) * sign):
+                return ('' if sign > 0 else '-') + name
+    return ','.join(f'{x:.3f}' for x in v)

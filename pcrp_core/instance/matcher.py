@@ -1,0 +1,116 @@
+"""Which known object a camera's cloud shows, and its pose: the steps of the instance pipeline.
+
+1. Shortlist: objects some view of which has the query's shape (spread along its principal
+   axes, in metres): size alone rules out most of a household gallery.
+2. Hypotheses: per shortlisted object, the (view, roll) pairs whose silhouettes agree with the
+   query's, or with gravity known, turns about the vertical; each ranked by a cheap cost.
+3. Refinement: the best poses of the objects that ranked best, by point-to-plane ICP.
+4. Verification: each refined pose judged both ways against the cloud (verification.py); the
+   lowest cost wins. What the runner-up scored is kept: how much better the answer is than the
+   best other object is much of how sure it can be (confidence.py).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from pcrp_core.instance import hypotheses
+from pcrp_core.instance.templates import Templates, shape_code
+from pcrp_core.instance.verification import Fit, Surface, judge, query_surface, visible_points
+from pcrp_core.registration.icp import icp_point_to_plane
+from pcrp_core.timing import Clock
+
+
+@dataclass
+class Candidate:
+    index: int          # gallery object
+    R: np.ndarray       # object to camera
+    t: np.ndarray
+    fit: Fit
+
+
+@dataclass
+class Match:
+    """The answer and what it beat: best, the best candidate of each other refined object
+    (best first), the distance beyond which a point counted as unexplained and the noise it was
+    set from, and how the hypotheses ranked the shortlisted objects."""
+    best: Candidate
+    others: list[Candidate]
+    tau: float
+    noise: float
+    coarse: list = field(default_factory=list)   # (coarse cost, object index), best first
+
+
+class InstanceMatcher:
+    """Matches clouds from a camera against a gallery's templates (see templates.py)."""
+
+    def __init__(self, templates: Templates):
+        import open3d as o3d
+
+        self.templates = templates
+        self.directions = templates.directions
+        self.surfaces, self.clouds = [], []
+        for points, normals, spacing in zip(templates.points, templates.normals, templates.spacing):
+            self.surfaces.append(Surface(points, normals, cKDTree(points), float(spacing)))
+            # copies: Open3D refuses read-only arrays (a worker process's memory-mapped model)
+            cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.array(points, dtype=np.float64)))
+            cloud.normals = o3d.utility.Vector3dVector(np.array(normals, dtype=np.float64))
+            self.clouds.append(cloud)
+
+    def shortlist(self, shape: np.ndarray, n: int, exclude=()) -> np.ndarray:
+        """Indices of the n objects with a view nearest the query's shape, nearest first."""
+        nearest = np.linalg.norm(self.templates.shapes - shape, axis=2).min(axis=1)
+        nearest[list(exclude)] = np.inf
+        return np.argsort(nearest)[: min(n, len(nearest) - len(exclude))]
+
+    def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,
+              exclude=()) -> Match:
+        """points: (N, 3) in the camera's frame (camera at the origin), cleaned and thinned;
+        opts: InstanceOptions.
+        up: the up direction in that frame when known, with up_object the objects' up axis.
+        exclude: gallery indices not to consider (how a calibration asks what the answer would
+        be if the object were not in the gallery)."""
+        import open3d as o3d
+
+        tpl = self.templates
+        rng = np.random.default_rng(0) if rng is None else rng
+        clock = Clock(timings)
+        query, noise = query_surface(points)
+        tau = max(opts.fit_tolerance, opts.noise_tolerance * noise)
+        view = hypotheses.QueryView(points)
+        sample = points[rng.choice(len(points), min(opts.score_points, len(points)), replace=False)]
+        clock.lap('description')
+        ranked = []
+        for i in self.shortlist(shape_code(points), opts.shortlist, exclude):
+            if up is not None and up_object is not None:
+                R, t, v = hypotheses.upright(view, up, up_object, tpl.cameras[i], tpl.view_centres[i],
+                                             opts.yaw_steps)
+            else:
+                R, t, v = hypotheses.from_views(view, tpl.frames[i], tpl.signatures[i], tpl.view_centres[i],
+                                                opts.silhouette_poses)
+            cost = hypotheses.coarse_cost(R, t, v, sample, self.surfaces[i].tree, tpl.samples[i], query.tree)
+            best = np.argsort(cost)[: opts.poses_refined]
+            ranked.append((float(cost[best[0]]), int(i), R[best], t[best]))
+        ranked.sort(key=lambda r: r[0])
+        clock.lap('hypotheses')
+        source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(
+            points[rng.choice(len(points), min(opts.refine_points, len(points)), replace=False)]))
+        best_of: dict[int, Candidate] = {}
+        # objects whose best hypothesis costs far more than the best object's are not refined:
+        # on validation views the right object's coarse cost was within 1.6 times the best's
+        within = [r for r in ranked[: opts.objects_refined] if r[0] <= opts.coarse_ratio * ranked[0][0]]
+        for _, i, Rs, ts in within:
+            reach = float(np.clip(0.15 * tpl.diameter[i], 2 * tau, 0.03))
+            stages = ((reach, reach / 2, 30), (2 * tau, tau, 20))
+            for R, t in zip(Rs, ts):
+                R, t = icp_point_to_plane(source, self.clouds[i], R, t, stages)
+                clock.lap('refinement')
+                expected = visible_points(tpl.visible[i], self.directions, tpl.centre[i], R, t)
+                fit = judge(query, self.surfaces[i], expected, R, t, tau, opts.unshown_weight)
+                if i not in best_of or fit.cost < best_of[i].fit.cost:
+                    best_of[i] = Candidate(i, R, t, fit)
+                clock.lap('verification')
+        order = sorted(best_of.values(), key=lambda c: c.fit.cost)
+        return Match(order[0], order[1:], tau, noise, [(c, i) for c, i, _, _ in ranked])

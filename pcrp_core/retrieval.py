@@ -1,0 +1,45 @@
+"""PCRP's retrieval: FR-PointHop point features, one VLAD vector per cloud, nearest gallery objects.
+
+Registration needs the retrieved objects' own point features; they are computed on demand and
+kept in a bounded cache, since a stream sees the same few objects again and again.
+"""
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import numpy as np
+
+from pcrp_core.geometry import normalised
+from pcrp_core.pose import Prepared, prepare
+from pcrp_core.timing import Clock
+
+
+def describe(pointhop, vlad, normed: np.ndarray, viewpoint=None, timings: dict | None = None):
+    """(sampled indices, point features, VLAD vector) of a cloud in normalised units."""
+    sampled, feats = pointhop.transform(normed, viewpoint, timings)
+    clock = Clock(timings)
+    vec = vlad.transform(feats)
+    clock.lap('vlad')
+    return sampled, feats, vec
+
+
+class PreparedCache:
+    """Registration-ready gallery objects, made on first use and kept, least recently used first
+    out. Point features only for the objects that seed hypotheses; verifiers need just the cloud
+    and its tree."""
+
+    def __init__(self, pointhop, gallery, unit: float):
+        self.pointhop, self.gallery, self.unit = pointhop, gallery, unit
+        self._items: OrderedDict[tuple, Prepared] = OrderedDict()
+
+    def get(self, i: int, features: bool, size: int) -> Prepared:
+        key = (i, features)
+        if key in self._items:
+            self._items.move_to_end(key)
+            return self._items[key]
+        normed = normalised(self.gallery.clouds[i], self.unit)
+        prep = prepare(normed, *self.pointhop.transform(normed)) if features else prepare(normed)
+        self._items[key] = prep
+        while len(self._items) > size:
+            self._items.popitem(last=False)
+        return prep
