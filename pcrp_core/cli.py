@@ -1,4 +1,4 @@
-"""`pcrp` command line: build | query (core); make-bag | replay | process | demo are added by pcrp_ros.
+"""`pcrp` command line: build | query | eval (core); make-bag | replay | process | demo are added by pcrp_ros.
 
 Each subcommand lives in a `register(subparsers)` function that adds its parser and sets
 `func` to a handler taking the parsed args and returning an exit code. Heavy imports stay
@@ -123,6 +123,81 @@ def _query(args) -> int:
     return 0
 
 
+def register_eval(sub) -> None:
+    p = sub.add_parser("eval", help="how good a model is on your own meshes, seen by a simulated depth camera",
+                       description="Render seeded depth-camera views of every mesh in a folder (metres; 640x480, "
+                                   "f=600, range noise growing with depth; perfectly segmented), answer them with the "
+                                   "model as the node would, and print per-family and overall rates: right object, "
+                                   "pose right (ADD-S < 10 % of the diameter), ADD-S AUC, error medians, wrong answers "
+                                   "accepted, right ones rejected, time per view.")
+    p.add_argument("meshes", help="folder of meshes in metres, as given to `pcrp build` (one object per file, or "
+                                  "one sub-folder per category)")
+    p.add_argument("--model", required=True,
+                   help="model directory built from those meshes ('default' for the shipped one)")
+    p.add_argument("--views-per-object", type=int, default=2, help="views drawn per mesh (default 2)")
+    p.add_argument("--kind", default="free", choices=["free", "table"],
+                   help="free: any orientation in front of the camera; table: standing on its z axis, the camera "
+                        "looking down at 25-65 degrees (default free)")
+    p.add_argument("--occlusion", action="store_true", help="a box or cylinder hides 20-60 %% of each object's pixels")
+    p.add_argument("--up", action="store_true",
+                   help="tell the model which way is up (the table's normal); needs --kind table and a model "
+                        "built with --up-axis")
+    p.add_argument("--seed", type=int, default=0, help="seed of the views (default 0); views of seed S are the same "
+                                                       "whatever else is drawn")
+    p.add_argument("--json", default=None, metavar="FILE", help="also write the summary and per-view records here")
+    p.set_defaults(func=_eval)
+
+
+def _eval(args) -> int:
+    from pcrp_core import ModelError, PCRP
+    from pcrp_core.evaluation.run import evaluate, format_summary, jsonable, summarise
+    from pcrp_core.evaluation.scenes import sample_scenes
+    from pcrp_core.sources import load_source
+
+    if args.views_per_object < 1:
+        return _fail("--views-per-object must be at least 1")
+    if args.up and args.kind != "table":
+        return _fail("--up needs --kind table: free views have no up")
+    try:
+        model = PCRP.load(None if args.model == "default" else args.model)
+    except ModelError as e:
+        return _fail(str(e))
+    if args.up:
+        try:
+            model.check_up([0.0, 0.0, 1.0])
+        except ValueError as e:
+            return _fail(str(e))
+    try:
+        objects = load_source(args.meshes)
+    except (OSError, ValueError) as e:
+        return _fail(str(e))
+    meshes = {o.gallery_id: o.mesh for o in objects if o.mesh is not None}
+    skipped = [o.gallery_id for o in objects if o.mesh is None]
+    if skipped:
+        print(f"pcrp eval: {len(skipped)} clouds skipped (a view is rendered from a mesh): {', '.join(skipped[:5])}",
+              file=sys.stderr)
+    if not meshes:
+        return _fail(f"{args.meshes}: no meshes to render")
+    unknown = [g for g in meshes if g not in model.gallery.index]
+    if unknown:
+        print(f"pcrp eval: {len(unknown)} of the meshes are not in the model's gallery, so can never be named: "
+              f"{', '.join(unknown[:5])}", file=sys.stderr)
+    try:
+        scenes = sample_scenes(meshes, args.views_per_object, args.kind, args.occlusion, args.seed, progress=_progress)
+    except RuntimeError as e:
+        return _fail(str(e))
+    rows = evaluate(model, scenes, meshes, use_up=args.up, progress=_progress)
+    summary = summarise(rows)
+    print(f"{len(rows)} {args.kind}{' occluded' if args.occlusion else ''} views of {len(meshes)} meshes, seed "
+          f"{args.seed}{', up given' if args.up else ''}; model {args.model}")
+    print(format_summary(summary))
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(jsonable({"settings": {k: v for k, v in vars(args).items() if k != "func"}, "summary": summary,
+                                "records": rows}), f, indent=1)
+    return 0
+
+
 def parse_up(text):
     """--up's X,Y,Z as three floats (None when not given); ValueError saying what is expected."""
     if text is None:
@@ -156,7 +231,7 @@ def format_result(r) -> str:
 def build_parser(extensions=()) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="pcrp", description="PCRP point cloud object retrieval and pose estimation")
     sub = parser.add_subparsers(dest="command", required=True)
-    for register in (register_build, register_query, *extensions):
+    for register in (register_build, register_query, register_eval, *extensions):
         register(sub)
     return parser
 

@@ -1,12 +1,17 @@
-"""The robot evaluation: rendered views, pose errors, occluders, seeds.
+"""The robot evaluation: rendered views, pose errors, occluders, seeds, `pcrp eval`.
 
 Meshes are Open3D primitives written to a temporary folder, so these run without the YCB data.
 """
+import json
+import subprocess
+import sys
+
 import numpy as np
 import open3d as o3d
 import pytest
 from scipy.spatial.transform import Rotation
 
+from helpers import REPO
 from pcrp_core.evaluation import metrics
 from pcrp_core.evaluation.scenes import OCCLUDED_SHARE, sample_scene, sample_scenes
 from pcrp_core.sources.camera import Mesh, PinholeCamera, RangeNoise, render_depth, view_of
@@ -102,3 +107,38 @@ def test_scenes_come_from_their_seeds_alone():
         assert -heights.min() >= 0.45 * np.sin(np.radians(25))
     free = sample_scenes(meshes, 1, "free", seed=7)
     assert all(s.up is None and s.kind == "free" for s in free)
+
+
+def _write_meshes(folder, twins=False):
+    folder.mkdir()
+    flat = o3d.geometry.TriangleMesh.create_box(0.12, 0.08, 0.03)
+    o3d.io.write_triangle_mesh(str(folder / "flat_box.ply"), flat)
+    can = o3d.geometry.TriangleMesh.create_cylinder(0.03, 0.15, resolution=48).translate([0, 0, 0.075])
+    o3d.io.write_triangle_mesh(str(folder / "tall_can.ply"), can)
+    if twins:   # the same box in another frame: a geometric twin
+        other = o3d.geometry.TriangleMesh.create_box(0.12, 0.08, 0.03)
+        other.rotate(Rotation.from_euler("z", 90, degrees=True).as_matrix(), center=(0, 0, 0)).translate([0.2, 0.1, 0])
+        o3d.io.write_triangle_mesh(str(folder / "flat_box_copy.ply"), other)
+
+
+def _run(*args, module="pcrp_ros.cli"):
+    return subprocess.run([sys.executable, "-m", module, *args], capture_output=True, text=True, timeout=300,
+                          cwd=REPO)
+
+
+def test_pcrp_eval_on_two_meshes_runs_end_to_end(tmp_path):
+    meshes, model, out = tmp_path / "meshes", tmp_path / "model", tmp_path / "eval.json"
+    _write_meshes(meshes)
+    built = _run("build", str(meshes), "--views", "4", "--up-axis", "z", "--out", str(model))
+    assert built.returncode == 0, built.stderr
+    done = _run("eval", str(meshes), "--model", str(model), "--views-per-object", "1", "--kind", "table", "--up",
+                "--json", str(out))
+    assert done.returncode == 0, done.stderr
+    assert "2 table views of 2 meshes" in done.stdout and "overall" in done.stdout and "pose right" in done.stdout
+    result = json.loads(out.read_text())
+    assert [r["object_id"] for r in result["records"]] == ["flat_box", "tall_can"]
+    # two shapes this different, standing on a table, are told apart and posed
+    assert result["summary"]["overall"]["right_object"] == 1.0 and result["summary"]["overall"]["pose_right"] == 1.0
+    assert all(r["seconds"] > 0 and r["add_s"] < 0.01 for r in result["records"])
+    refused = _run("eval", str(meshes), "--model", str(model), "--up")
+    assert refused.returncode == 2 and "--kind table" in refused.stderr and "Traceback" not in refused.stderr
