@@ -1,6 +1,7 @@
-"""The robot evaluation: rendered views, pose errors, occluders, seeds, `pcrp eval`.
+"""The robot evaluation: rendered views, pose errors, occluders, seeds, `pcrp eval`, the YCB report.
 
-Meshes are Open3D primitives written to a temporary folder, so these run without the YCB data.
+Meshes are Open3D primitives (in memory, or written to a temporary folder for the commands), so
+these run without the YCB data.
 """
 import json
 import subprocess
@@ -142,3 +143,20 @@ def test_pcrp_eval_on_two_meshes_runs_end_to_end(tmp_path):
     assert all(r["seconds"] > 0 and r["add_s"] < 0.01 for r in result["records"])
     refused = _run("eval", str(meshes), "--model", str(model), "--up")
     assert refused.returncode == 2 and "--kind table" in refused.stderr and "Traceback" not in refused.stderr
+
+
+def test_the_robot_report_quick_run_writes_its_files_and_finds_twins(tmp_path):
+    meshes, out = tmp_path / "meshes", tmp_path / "out"
+    _write_meshes(meshes, twins=True)
+    done = _run("robot-report", "--quick", "--data", str(meshes), "--out", str(out), "--cache", str(tmp_path / "cache"),
+                module="tools")
+    assert done.returncode == 0, done.stderr
+    text = (out / "ROBOT.md").read_text()
+    assert "QUICK RUN" in text and "never used to choose anything" in text and "CC BY 4.0" in text
+    assert (out / "robot_adds.png").stat().st_size > 10_000
+    res = json.loads((out / "robot.json").read_text())
+    assert set(res["results"]) == {"free", "table", "free_occluded", "table_occluded"}
+    assert all(len(rows) == 3 for per in res["results"].values() for rows in per.values())
+    assert set(res["results"]["free"]) == {"pcrp", "ransac", "fgr", "ransac_told", "fgr_told"}
+    (a, b, chamfer), = res["twins"]["pairs"]
+    assert {a, b} == {"flat_box", "flat_box_copy"} and chamfer < 0.0005

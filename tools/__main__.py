@@ -5,7 +5,7 @@ import argparse
 import sys
 
 from pcrp_core.cli import run
-from tools import bench, robustness, soak
+from tools import bench, robot_report, robustness, soak
 from tools.paper_eval import command as paper_eval
 
 
@@ -13,7 +13,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m tools", description="pcrp's experiments, benchmarks and "
                                      "fault batteries (run from a checkout; not installed)")
     sub = parser.add_subparsers(dest="command", required=True)
-    for register in (paper_eval.register_eval, bench.register, robustness.register, soak.register):
+    for register in (paper_eval.register_eval, bench.register, robustness.register, soak.register,
+                     robot_report.register):
         register(sub)
     return run(parser, argv)
 
