@@ -140,7 +140,7 @@ def test_pcrp_eval_on_two_meshes_runs_end_to_end(tmp_path):
     assert [r["object_id"] for r in result["records"]] == ["flat_box", "tall_can"]
     # two shapes this different, standing on a table, are told apart and posed
     assert result["summary"]["overall"]["right_object"] == 1.0 and result["summary"]["overall"]["pose_right"] == 1.0
-    assert all(r["seconds"] > 0 and r["add_s"] < 0.01 for r in result["records"])
+    assert all(r["seconds"] > 0 and r["add_s"] < 0.01 and r["candidate_rank"] >= 1 for r in result["records"])
     refused = _run("eval", str(meshes), "--model", str(model), "--up")
     assert refused.returncode == 2 and "--kind table" in refused.stderr and "Traceback" not in refused.stderr
 
@@ -153,6 +153,7 @@ def test_the_robot_report_quick_run_writes_its_files_and_finds_twins(tmp_path):
     assert done.returncode == 0, done.stderr
     text = (out / "ROBOT.md").read_text()
     assert "QUICK RUN" in text and "never used to choose anything" in text and "CC BY 4.0" in text
+    assert "Retrieval or choice?" in text and "among the 16 candidates" in text
     assert (out / "robot_adds.png").stat().st_size > 10_000
     res = json.loads((out / "robot.json").read_text())
     assert set(res["results"]) == {"free", "table", "free_occluded", "table_occluded"}

@@ -42,19 +42,25 @@ class Truths(dict):
 
 def record(scene: Scene, answer, seconds: float, truths: Truths, reason: str = "") -> dict:
     """One view's row. answer: anything with gallery_id, rotation, translation, rejected, reason
-    and a confidence (or score) in [0, 1]; None when the method gave no answer (reason says why)."""
+    and a confidence (or score) in [0, 1]; None when the method gave no answer (reason says why).
+    candidate_rank: the true object's 1-based rank among the answer's retrieval candidates (0: not
+    among them; None: the method lists none)."""
     truth = truths[scene.object_id]
     row = {"object_id": scene.object_id, "family": metrics.family(scene.object_id), "scenario": scene.scenario,
            "view": scene.view, "seed": scene.seed, "distance": round(scene.distance, 4),
            "occluded_share": round(scene.occluded_share, 4), "n_points": int(len(scene.points)),
            "diameter": round(truth.diameter, 5), "gallery_id": None, "right_object": False, "add": None,
            "add_s": None, "pose_right": False, "rotation_error_deg": None, "translation_error": None,
-           "rejected": True, "reason": reason, "confidence": 0.0, "seconds": float(seconds)}
+           "rejected": True, "reason": reason, "confidence": 0.0, "candidate_rank": None, "seconds": float(seconds)}
     if answer is None:
         return row
     right = answer.gallery_id == scene.object_id
+    # where retrieval put the true object, to tell a retrieval miss from a wrong pick among candidates
+    listed = [g for g, _ in getattr(answer, "candidates", ())]
+    rank = (listed.index(scene.object_id) + 1 if scene.object_id in listed else 0) if listed else None
     row.update(gallery_id=answer.gallery_id, right_object=bool(right), rejected=bool(answer.rejected),
-               reason=answer.reason, confidence=float(getattr(answer, "confidence", getattr(answer, "score", 0.0))))
+               reason=answer.reason, confidence=float(getattr(answer, "confidence", getattr(answer, "score", 0.0))),
+               candidate_rank=rank)
     if right:
         R, t = np.asarray(answer.rotation, dtype=np.float64), np.asarray(answer.translation, dtype=np.float64)
         adds = metrics.add_s(R, t, scene.R, scene.t, truth.points)
