@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.pcrp-setup
 
-.PHONY: setup demo test robustness eval bench clean-venv
+.PHONY: setup demo test robustness eval bench robot clean-venv
 
 setup: $(STAMP)
 
@@ -36,6 +36,11 @@ eval: setup
 # regenerates docs/results/BENCHMARKS.md: speed, memory, scale, the node under load (about 30 minutes)
 bench: setup
 	$(PY) -m tools bench --out docs/results
+
+# regenerates docs/results/ROBOT.md: pcrp and Open3D's pipelines on YCB depth-camera views (one view per object and
+# scenario, about 35 minutes on a shared 2-core machine; --views-per-object 2 doubles it)
+robot: setup
+	$(PY) -m tools robot-report --data ../shared/data/ycb --out docs/results --views-per-object 1
 
 clean-venv:
 	rm -rf $(VENV)
