@@ -102,6 +102,15 @@ def build_model(data: Path, cache: Path, n_objects: int, rebuild: bool = False) 
     return out
 
 
+def _options(model) -> dict:
+    """The node-default settings the report names: read through get_params() where the model has it
+    (settings defined in pcrp_core.config, min_score renamed min_confidence), else as attributes."""
+    params = model.get_params() if hasattr(model, "get_params") else {
+        k: getattr(model, k) for k in ("n_candidates", "min_score", "max_points", "scale_mode")}
+    return {k: params[k] for k in ("n_candidates", "min_confidence", "min_score", "max_points", "scale_mode")
+            if k in params}
+
+
 def _view_seed(scene) -> int:
     import numpy as np
     return int(np.random.SeedSequence([scene.seed, scene.object_index, scene.view]).generate_state(1)[0] % 2**31)
@@ -174,7 +183,7 @@ def run(data: Path, split: str, views: int, quick: bool, cache: Path, rebuild: b
         "model": {"recipe": f"pcrp build {data.name} --views {GALLERY_VIEWS} --up-axis z",
                   "views": model_meta.get("views"), "up_axis": model_meta.get("up_axis"),
                   "n_objects": model_meta.get("n_objects"),
-                  "options": {k: getattr(model, k) for k in ("n_candidates", "min_score", "max_points", "scale_mode")}},
+                  "options": _options(model)},
         "baselines": {"voxel": ro.VOXEL, "normal_radius": ro.NORMAL_RADIUS, "feature_radius": ro.FEATURE_RADIUS,
                       "ransac_distance": ro.RANSAC_DISTANCE, "ransac_criteria": list(ro.RANSAC_CRITERIA),
                       "fgr_distance": ro.FGR_DISTANCE, "icp_distance": ro.ICP_DISTANCE, "gate": list(ro.GATE)},

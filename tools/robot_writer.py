@@ -228,8 +228,11 @@ def _analysis(res: dict, summaries: dict) -> str:
                   if off else "."))
     conf_right, conf_wrong = _confidences(pc)
     accepted = [r for r in pc if not r["rejected"]]
-    out.append(f"**Rejection:** pcrp rejects {_pct(s_pc['rejected'])} of the views (fit score below "
-               f"min_score {res['model']['options']['min_score']}); of the answers it accepts "
+    opts = res["model"]["options"]
+    threshold = "min_confidence" if "min_confidence" in opts else "min_score"
+    out.append(f"**Rejection:** pcrp rejects {_pct(s_pc['rejected'])} of the views "
+               f"({'confidence' if threshold == 'min_confidence' else 'fit score'} below {threshold} "
+               f"{opts[threshold]}); of the answers it accepts "
                f"{_pct(np.mean([r['pose_right'] for r in accepted]) if accepted else float('nan'))} are right. "
                f"Its confidence ranks a right answer above a wrong one with probability "
                f"{_auroc(conf_right, conf_wrong):.2f} (0.5 is no signal; RANSAC's ICP fitness: "
