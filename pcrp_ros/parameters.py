@@ -14,21 +14,34 @@ from pcrp_core.config import Options, setting, user_settings
 @dataclass(frozen=True)
 class NodeSettings(Options):
     """What the node itself does, beside the model's settings."""
-    model_path: str = setting("", "Model directory built by `pcrp build`; empty for the shipped default model.",
-                              read_only=True)
-    input_topics: tuple = setting(("segmented_object",), "PointCloud2 topics of segmented objects, one object per "
-                                                         "message.", read_only=True)
-    publish_aligned_model: bool = setting(True, "Publish T/aligned_model, the gallery object moved into the cloud's "
-                                                "frame.")
-    sensor_at_origin: bool = setting(True, "The cloud's frame is the sensor's own (one-sided views seen from its "
-                                           "origin); false for complete objects or clouds in a world frame.")
-    up_vector: tuple = setting((0.0, 0.0, 0.0), "Up (against gravity) in the input clouds' frame, if fixed and known: "
-                                                "[0.0, -1.0, 0.0] for a level camera's optical frame; zeros: unknown. Needs a model "
-                                                "that records its up axis; a tilting camera keeps it current.")
-    qos_reliability: str = setting("best_effort", "Input QoS reliability: best_effort (sensor data) or reliable.",
-                                   choices=("best_effort", "reliable"), read_only=True)
-    qos_depth: int = setting(2, "Input QoS queue depth.", low=1, high=100, read_only=True)
-    log_throttle_sec: float = setting(5.0, "Least seconds between two log lines of one kind.", low=0.0, high=3600.0)
+
+    model_path: str = setting(
+        '', 'Model directory built by `pcrp build`; empty for the shipped default model. Set '
+        'while running, the new model is loaded beside the old one, which answers until they '
+        'are swapped; one that fails to load is refused (logged, in /diagnostics) and the old '
+        'one kept.')
+    input_topics: tuple = setting(
+        ('segmented_object',), 'PointCloud2 topics of segmented objects, one object per '
+        'message.', read_only=True)
+    publish_aligned_model: bool = setting(
+        True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.")
+    sensor_at_origin: bool = setting(
+        True, "The cloud's frame is the sensor's own (one-sided views seen from its origin); "
+        'false for complete objects or clouds in a world frame.')
+    up_vector: tuple = setting(
+        (0.0, 0.0, 0.0), "Up (against gravity) in the input clouds' frame, if fixed and known: "
+        "[0.0, -1.0, 0.0] for a level camera's optical frame; zeros: unknown. Needs a model "
+        'that records its up axis; a tilting camera keeps it current.')
+    qos_reliability: str = setting(
+        'best_effort', 'Input QoS reliability: best_effort (sensor data) or reliable.',
+        choices=('best_effort', 'reliable'), read_only=True)
+    qos_depth: int = setting(2, 'Input QoS queue depth.', low=1, high=100, read_only=True)
+    log_throttle_sec: float = setting(
+        5.0, 'Least seconds between two log lines of one kind.', low=0.0, high=3600.0)
+    workers: int = setting(
+        1, 'Clouds answered at once. 1: in a thread of the node; more: that many worker '
+        'processes, each with its own copy of the model (about one per core).',
+        low=1, high=64, read_only=True)
 
 
 MODEL_SETTINGS = tuple(d["name"] for d in user_settings())

@@ -102,7 +102,7 @@ def test_bad_clouds_are_counted_and_the_next_good_one_is_answered(model):
                 for arr in diagnostics:
                     for status in arr.status:
                         values = {kv.key: kv.value for kv in status.values}
-                        if status.name == "pcrp_node: segmented_object" and values.get("answered") == "1":
+                        if status.name == "/pcrp_node: /segmented_object" and values.get("answered") == "1":
                             return values
             assert wait_for(reported, 5)
         values = reported()
@@ -125,15 +125,15 @@ def test_parameters_are_validated_at_runtime(model):
         assert not bad.successful and "min_points" in bad.reason
         ok = node.set_parameters([Parameter("min_confidence", value=0.25)])[0]
         assert ok.successful and model.options.min_confidence == 0.25
-        ro = node.set_parameters([Parameter("model_path", value="/elsewhere")])[0]
-        assert not ro.successful
+        for name, value in (("workers", 2), ("input_topics", ["other"])):
+            assert not node.set_parameters([Parameter(name, value=value)])[0].successful
         node.destroy_node()
 
 
 def test_up_vector_is_validated_and_reaches_the_core(model, monkeypatch):
     with ros_context() as ctx:
         node = PcrpNode(model=model, context=ctx)
-        assert node._up is None                                  # [0, 0, 0]: unknown
+        assert node.answerer._up is None                                  # [0, 0, 0]: unknown
         assert not node.set_parameters([Parameter("up_vector", value=[1.0, 2.0])])[0].successful
         assert node.set_parameters([Parameter("up_vector", value=[0.0, -2.0, 0.0])])[0].successful
         seen = []
@@ -143,7 +143,7 @@ def test_up_vector_is_validated_and_reaches_the_core(model, monkeypatch):
             raise InvalidCloud("empty", "recorded, not answered")
         monkeypatch.setattr(model, "estimate", estimate)
         monkeypatch.setattr(model, "pose_options", model.pose_options)  # restored after
-        node._answer("segmented_object", Header(), np.zeros((40, 3)), 0.0)
+        node.answerer.answer("segmented_object", (Header(), np.zeros((40, 3)), 0.0), node.answerer.engine)
         np.testing.assert_allclose(seen[0]["up"], [0.0, -1.0, 0.0])
         assert node.set_parameters([Parameter("up_tolerance_deg", value=30.0)])[0].successful
         assert model.pose_options.up_tolerance_deg == 30.0

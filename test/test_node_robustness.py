@@ -115,7 +115,7 @@ def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
             answered = lambda n: n.stats[topic].counts["answered"]  # noqa: E731
             assert publish_until(pub, xyz_to_pointcloud2(g.points, _header(7)),
                                  lambda: answered(first) and answered(second) and len(poses) >= 2)
-            assert wait_for(lambda: {f"pcrp_node: {topic}", f"pcrp_node_2: {topic}"} <= names, 5)
+            assert wait_for(lambda: {f"/pcrp_node: /{topic}", f"/pcrp_node_2: /{topic}"} <= names, 5)
             # each node works in a thread of its own: a cloud received while it was busy may still
             # be waiting in its slot, so wait until every received cloud is decided and its pose is in
             decided = lambda n: sum(n.stats[topic].counts[k]  # noqa: E731
@@ -147,16 +147,16 @@ def test_rejections_are_logged_once_per_reason_per_throttle_period(model):
         said = []
 
         class Logger:
-            def warn(self, text):
+            def warning(self, text):
                 said.append(text)
         node.get_logger = Logger
         try:
             for reason in ("missing_field", "missing_field", "empty", "missing_field", "empty"):
-                node._reject("segmented_object", reason, "details")
+                node.answerer.reject("segmented_object", reason, "details")
             assert node.stats["segmented_object"].rejections == {"missing_field": 3, "empty": 2}
             assert len(said) == 2 and "missing_field, 1 so far" in said[0] and "(empty, 1 so far)" in said[1]
             node.set_parameters([Parameter("log_throttle_sec", value=0.0)])
-            node._reject("segmented_object", "empty", "details")
+            node.answerer.reject("segmented_object", "empty", "details")
             assert len(said) == 3 and "(empty, 3 so far)" in said[2]
         finally:
             node.destroy_node()
