@@ -29,6 +29,7 @@ setup(
         "console_scripts": [
             "pcrp = pcrp_ros.cli:main",
             "pcrp_node = pcrp_ros.node:main",
+            "pcrp_lifecycle_node = pcrp_ros.lifecycle_node:main",
         ],
     },
 )
