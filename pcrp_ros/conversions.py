@@ -157,7 +157,7 @@ def detections_msg(result, header):
         return None
     hyp = ObjectHypothesisWithPose()
     hyp.hypothesis.class_id = result.gallery_id
-    hyp.hypothesis.score = float(result.score)
+    hyp.hypothesis.score = float(result.confidence)   # how likely the answer is right
     hyp.pose.pose = pose_to_msg(result)
     det = Detection3D(header=header)
     det.results = [hyp]
