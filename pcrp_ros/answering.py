@@ -97,8 +97,11 @@ class Engine:
 
 
 def load_engine(path: str, params: dict, up, workers: int, model=None) -> Engine:
-    """Load and check the model at path (or take the given one), apply the settings and start
-    the workers; LOAD_ERRORS saying why not, with nothing left running."""
+    """
+    Load and check the model at path (or take the given one) and start the workers.
+
+    The settings are applied; LOAD_ERRORS say why not, with nothing left running.
+    """
     model = model if model is not None else PCRP.load(path or None)
     model.set_params(**params)
     if up is not None:
@@ -225,8 +228,11 @@ class CloudAnswerer:
                          f"{', '.join(sub.topic_name for sub in self._subs)}")
 
     def deactivate(self) -> None:
-        """Stop answering (a cloud being answered is finished, not published) and remove the
-        subscriptions and publishers."""
+        """
+        Stop answering and remove the subscriptions and publishers.
+
+        A cloud being answered is finished, not published.
+        """
         with self._cv:
             self._running = False
             for topic in self._slots:   # received, never to be answered: accounted for
@@ -302,8 +308,11 @@ class CloudAnswerer:
 
     # -- switching models ---------------------------------------------------------------------
     def reload(self, path: str, from_parameter: bool = False) -> ReloadRequest:
-        """Load the model at path beside the current one, off the callback thread, and swap
-        them once it is ready; a newer request replaces one still waiting."""
+        """
+        Load the model at path beside the current one, off the callback thread.
+
+        They are swapped once it is ready; a newer request replaces one still waiting.
+        """
         request = ReloadRequest(path, from_parameter)
         with self._reload_lock:
             if self._pending is not None:
@@ -380,8 +389,11 @@ class CloudAnswerer:
 
     # -- receiving ----------------------------------------------------------------------------
     def _on_cloud(self, topic: str, msg: PointCloud2) -> None:
-        """Refuse unreadable clouds at once (cheap); queue usable ones, newest replacing any
-        still waiting."""
+        """
+        Refuse an unreadable cloud at once (cheap), or queue it.
+
+        The newest cloud of a topic replaces any still waiting.
+        """
         received = time.monotonic()
         stats = self.stats[topic]
         stats.count('received')
@@ -404,8 +416,11 @@ class CloudAnswerer:
             self._cv.notify()
 
     def _next(self, k: int, engine):
-        """Under the lock: what worker k does next: ('stop',), ('switch', engine),
-        ('restart',) or ('answer', topic, item)."""
+        """
+        Decide, under the lock, what worker k does next.
+
+        One of ('stop',), ('switch', engine), ('restart',) or ('answer', topic, item).
+        """
         while True:
             if not self._running:
                 return ('stop',)
@@ -469,8 +484,11 @@ class CloudAnswerer:
         self._log().info(f'worker {k} restarted (pid {engine.estimators[k].pid})')
 
     def reject(self, topic: str, reason: str, message: str) -> None:
-        """Count, and log once per topic and reason per log_throttle_sec (rclpy's own throttle
-        is per call site, so one noisy reason would hide every other)."""
+        """
+        Count a rejected cloud, and log once per topic and reason per log_throttle_sec.
+
+        rclpy's own throttle is per call site, so one noisy reason would hide every other.
+        """
         self.stats[topic].count('rejected', reason)
         now = time.monotonic()
         key = (topic, reason)
@@ -517,8 +535,12 @@ class CloudAnswerer:
         return 'answering in the node process' if n == 1 else f'{n} worker processes'
 
     def diagnostics(self) -> DiagnosticArray:
-        """The node's statuses: its model, then one per input topic. Names carry the node's
-        fully qualified name and the resolved topic, so instances in other namespaces differ."""
+        """
+        Make the node's statuses: its model, then one per input topic.
+
+        Names carry the node's fully qualified name and the resolved topic, so instances in
+        other namespaces differ.
+        """
         fqn = self.node.get_fully_qualified_name()
         arr = DiagnosticArray()
         arr.header.stamp = self.node.get_clock().now().to_msg()
@@ -561,8 +583,12 @@ def _text(key: str, value) -> str:
 
 
 def _checked_up(value, model):
-    """up_vector as estimate() takes it (None for [0, 0, 0]); ValueError saying why it cannot
-    be used. Without a model only its shape is checked (the model is checked on loading)."""
+    """
+    Check up_vector and return it as estimate() takes it (None for [0, 0, 0]).
+
+    ValueError says why it cannot be used. Without a model only its shape is checked (the
+    model is checked on loading).
+    """
     v = np.asarray(list(value), dtype=np.float64)
     if v.shape == (3,) and not v.any():
         return None
@@ -577,7 +603,7 @@ def _checked_up(value, model):
 
 
 def _check_model_settings(values: dict) -> None:
-    """ValueError unless the model settings are valid together (no model needed)."""
+    """Raise ValueError unless the model settings are valid together (no model needed)."""
     query = set(QueryOptions.__dataclass_fields__)
     QueryOptions(**{k: v for k, v in values.items() if k in query})
     PoseOptions(**{k: v for k, v in values.items() if k not in query})

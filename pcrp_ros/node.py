@@ -55,7 +55,7 @@ class PcrpNode(Node):
 
     @property
     def model(self):
-        """The model answering now (it changes when model_path is set)."""
+        """Return the model answering now (it changes when model_path is set)."""
         return self.answerer.engine.model
 
     @property

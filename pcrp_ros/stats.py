@@ -78,9 +78,13 @@ class StreamStats:
             return out
 
     def status(self) -> tuple[bool, str]:
-        """(healthy, one line): unhealthy when clouds were decided and none answered, or when
-        the last WARN_STREAK decided clouds were all rejected. A cloud still being answered,
-        the first one included, is no reason for a warning."""
+        """
+        Say whether the stream is healthy, and how it goes in one line.
+
+        Unhealthy when clouds were decided and none answered, or when the last WARN_STREAK
+        decided clouds were all rejected. A cloud still being answered, the first one
+        included, is no reason for a warning.
+        """
         with self._lock:
             c = self.counts
             text = f"{c['answered']} answered of {c['received']}"

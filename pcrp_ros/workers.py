@@ -135,7 +135,7 @@ class ProcessEstimator:
                              f'(exit code {self._proc.exitcode})') from None
 
     def estimate(self, points, viewpoint, up, params):
-        """The worker's PoseResult; InvalidCloud as the model raised it; WorkerDied."""
+        """Return the worker's PoseResult; raise InvalidCloud as the model did, or WorkerDied."""
         try:
             self._conn.send((points, viewpoint, up, params))
         except (BrokenPipeError, OSError):

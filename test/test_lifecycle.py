@@ -46,7 +46,7 @@ class Driver:
         self.change = client.create_client(ChangeState, f'/{name}/change_state')
         self.get = client.create_client(GetState, f'/{name}/get_state')
 
-    def set(self, transition: int) -> bool:
+    def transition(self, transition: int) -> bool:
         return _call(self.change, ChangeState.Request(
             transition=Transition(id=transition))).success
 
@@ -76,22 +76,22 @@ def test_transitions_load_answer_stop_and_free_the_model(tmp_path):
             assert drive.state() == State.PRIMARY_STATE_UNCONFIGURED
             assert node.model is None and not pub.get_subscription_count()
             # a configure that cannot load the model fails and leaves the node unconfigured
-            assert not drive.set(Transition.TRANSITION_CONFIGURE)
+            assert not drive.transition(Transition.TRANSITION_CONFIGURE)
             assert drive.state() == State.PRIMARY_STATE_UNCONFIGURED and node.model is None
             node.set_parameters([Parameter('model_path', value='')])
-            assert drive.set(Transition.TRANSITION_CONFIGURE)
+            assert drive.transition(Transition.TRANSITION_CONFIGURE)
             assert drive.state() == State.PRIMARY_STATE_INACTIVE
             assert node.model is not None and gid in node.model.gallery_ids
             # inactive: the model is loaded, but nothing listens yet
             assert not wait_for(lambda: pub.get_subscription_count(), 1.0)
 
-            assert drive.set(Transition.TRANSITION_ACTIVATE)
+            assert drive.transition(Transition.TRANSITION_ACTIVATE)
             assert drive.state() == State.PRIMARY_STATE_ACTIVE
             assert wait_for(lambda: pub.get_subscription_count(), 10)
             assert publish_until(pub, cloud_msg(1), lambda: poses)
             assert poses[0].header.stamp.sec == 1
 
-            assert drive.set(Transition.TRANSITION_DEACTIVATE)
+            assert drive.transition(Transition.TRANSITION_DEACTIVATE)
             assert drive.state() == State.PRIMARY_STATE_INACTIVE
             assert wait_for(lambda: not pub.get_subscription_count(), 10)
             answered = len(poses)
@@ -101,16 +101,16 @@ def test_transitions_load_answer_stop_and_free_the_model(tmp_path):
             assert node.stats[TOPIC].counts['received'] == received
 
             # answering again after a second activate
-            assert drive.set(Transition.TRANSITION_ACTIVATE)
+            assert drive.transition(Transition.TRANSITION_ACTIVATE)
             assert wait_for(lambda: pub.get_subscription_count(), 10)
             assert publish_until(pub, cloud_msg(3), lambda: any(
                 p.header.stamp.sec == 3 for p in poses))
 
-            assert drive.set(Transition.TRANSITION_DEACTIVATE)
-            assert drive.set(Transition.TRANSITION_CLEANUP)
+            assert drive.transition(Transition.TRANSITION_DEACTIVATE)
+            assert drive.transition(Transition.TRANSITION_CLEANUP)
             assert drive.state() == State.PRIMARY_STATE_UNCONFIGURED
             assert node.model is None and node.answerer.engine is None
-            assert drive.set(Transition.TRANSITION_UNCONFIGURED_SHUTDOWN)
+            assert drive.transition(Transition.TRANSITION_UNCONFIGURED_SHUTDOWN)
             assert drive.state() == State.PRIMARY_STATE_FINALIZED
 
 

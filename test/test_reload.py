@@ -12,8 +12,11 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Switching models while the node runs: a stream goes on through the switch, a bad model is
-refused and the old one kept, over real DDS."""
+"""
+Switching models while the node runs, over real DDS.
+
+A stream goes on through the switch; a bad model is refused and the old one kept.
+"""
 
 import shutil
 import threading
@@ -50,8 +53,12 @@ def _damage(path):
 
 
 class Stream:
-    """Clouds sent one at a time, each once the one before was answered or counted, from a
-    thread of its own: nothing is dropped for being stale, so every cloud must be answered."""
+    """
+    Clouds sent one at a time from a thread of its own.
+
+    Each is sent once the one before was answered or counted: nothing is dropped for being
+    stale, so every cloud must be answered.
+    """
 
     def __init__(self, client, node, cloud):
         self.node, self.cloud = node, cloud

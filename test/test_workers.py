@@ -35,7 +35,7 @@ TOPICS = ('workers_a/object', 'workers_b/object')
 
 
 def _alive(pid):
-    """Running (a killed child not yet reaped is a zombie: dead)."""
+    """Tell whether the process runs (a killed child not yet reaped, a zombie, does not)."""
     try:
         with open(f'/proc/{pid}/stat') as f:
             return f.read().rsplit(')', 1)[1].split()[0] != 'Z'
@@ -101,5 +101,10 @@ def test_worker_processes_answer_and_a_killed_one_is_replaced(monkeypatch):
 def test_a_broken_model_stops_a_node_with_workers_before_any_starts(tmp_path):
     with ros_context() as ctx:
         with pytest.raises(ModelError, match='no such model'):
-            PcrpNode(context=ctx, parameter_overrides=[
-                Parameter('workers', value=2), Parameter('model_path', value=str(tmp_path / 'nowhere'))])
+            PcrpNode(
+                context=ctx,
+                parameter_overrides=[
+                    Parameter('workers', value=2),
+                    Parameter('model_path', value=str(tmp_path / 'nowhere')),
+                ],
+            )
