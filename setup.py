@@ -15,30 +15,48 @@
 """ament_python package `pcrp`: `colcon build` on a Jazzy install, or `pip install .`."""
 
 from glob import glob
+import os
+from xml.etree import ElementTree
 
-from setuptools import find_packages, setup
+from setuptools import find_namespace_packages, setup
 
 PACKAGE = 'pcrp'
+# name, version, maintainer and license are package.xml's, so the two cannot disagree
+MANIFEST = ElementTree.parse(
+    os.path.join(os.path.dirname(os.path.abspath(__file__)), 'package.xml')).getroot()
+MAINTAINER = MANIFEST.find('maintainer')
 
 setup(
-    name=PACKAGE,
-    version='0.1.0',
-    packages=find_packages(include=['pcrp_core', 'pcrp_core.*', 'pcrp_ros', 'pcrp_ros.*']),
+    name=MANIFEST.findtext('name'),
+    version=MANIFEST.findtext('version'),
+    # namespace packages too: the model and the demo bag live in folders without __init__.py
+    packages=find_namespace_packages(include=['pcrp_core', 'pcrp_core.*', 'pcrp_ros',
+                                              'pcrp_ros.*'], exclude=['*.__pycache__']),
     package_data={'pcrp_core': ['data/*/*'], 'pcrp_ros': ['data/*/*']},
-    include_package_data=True,
     data_files=[
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),
         (f'share/{PACKAGE}/config', glob('config/*.yaml')),
         (f'share/{PACKAGE}/launch', glob('launch/*.launch.py')),
     ],
-    install_requires=['setuptools'],
+    # lower bounds: what Ubuntu Noble (ROS 2 Jazzy's platform) ships, or where pcrp needs an API
+    # (joblib's generator results: 1.3; rosbags' typestore API: 0.10)
+    install_requires=[
+        'setuptools',
+        'numpy>=1.26',
+        'scipy>=1.11',
+        'scikit-learn>=1.4',
+        'joblib>=1.3',
+        'tqdm>=4.66',
+        'open3d>=0.18',
+        'rosbags>=0.10',
+    ],
+    extras_require={'test': ['pytest', 'hypothesis']},
     zip_safe=False,
-    maintainer='pcrp maintainers',
-    maintainer_email='pcrp@example.com',
+    maintainer=MAINTAINER.text,
+    maintainer_email=MAINTAINER.get('email'),
     description='Unsupervised point cloud object retrieval and pose estimation (PCRP) for ROS 2',
-    license='Apache-2.0',
-    tests_require=['pytest'],
+    license=MANIFEST.findtext('license'),
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
