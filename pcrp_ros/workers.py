@@ -27,9 +27,17 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import threading
 import time
 
 from pcrp_core import InvalidCloud
+
+
+# One thread per worker: workers are meant one per core, and the core is as fast single-threaded
+# (docs/results/BENCHMARKS.md). Thread pools are sized when numpy and Open3D load, so this is set
+# in the environment a worker starts with; a value the user exported is kept.
+THREAD_VARIABLES = ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS')
+_ENVIRONMENT = threading.Lock()
 
 
 class WorkerDied(RuntimeError):
@@ -98,7 +106,14 @@ class ProcessEstimator:
         self._conn, child = ctx.Pipe()
         self._proc = ctx.Process(target=_worker_main, args=(child, model_path, params),
                                  name='pcrp_worker', daemon=True)
-        self._proc.start()
+        with _ENVIRONMENT:   # spawn hands the child the environment as it is at start()
+            added = [v for v in THREAD_VARIABLES if v not in os.environ]
+            os.environ.update({v: '1' for v in added})
+            try:
+                self._proc.start()
+            finally:
+                for v in added:
+                    os.environ.pop(v, None)
         child.close()
         self.pid = None
         if wait:

@@ -51,6 +51,9 @@ def test_worker_processes_answer_and_a_killed_one_is_replaced(monkeypatch):
         model = node.model
         pids = node.answerer.worker_pids()
         assert len(pids) == 2 and os.getpid() not in pids and all(_alive(p) for p in pids)
+        for pid in pids:   # one thread each: one worker per core
+            with open(f'/proc/{pid}/environ', 'rb') as f:
+                assert b'OMP_NUM_THREADS=1\0' in f.read() + b'\0'
 
         # the node's own copy of the model never estimates: the workers do
         def not_here(*args, **kwargs):
