@@ -47,6 +47,7 @@ from pcrp_ros.stats import StreamStats
 from pcrp_ros.workers import LocalEstimator, ProcessEstimator, WorkerDied, WorkerStartError
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
@@ -351,9 +352,10 @@ class CloudAnswerer:
             self._model_problem = f'could not switch to {where}: {why}'
             self._log().error(f'{self._model_problem}; still answering with {old.describe()}')
             request.finish(False, why)
-            if request.from_parameter:
+            with self._reload_lock:
+                newer = self._pending is not None
+            if request.from_parameter and not newer:
                 # the parameter says which model answers: back to the one still in use
-                from rclpy.parameter import Parameter
                 self.node.set_parameters([Parameter('model_path', value=old.path)])
             return
         with self._cv:
