@@ -39,17 +39,19 @@ setup(
         (f'share/{PACKAGE}/config', glob('config/*.yaml')),
         (f'share/{PACKAGE}/launch', glob('launch/*.launch.py')),
     ],
-    # lower bounds: what Ubuntu Noble (ROS 2 Jazzy's platform) ships, or where pcrp needs an API
-    # (joblib's generator results: 1.3; rosbags' typestore API: 0.10)
+    # lower bounds: the oldest versions the core, bag and CLI tests pass with (checked by
+    # `python -m tools.lower_bounds`): scipy 1.12 for Rotation.align_vectors' least turn between
+    # two single vectors, open3d 0.19 for farthest_point_down_sample's start index, rosbags 0.11
+    # for StoragePlugin; the others are what Ubuntu Noble (ROS 2 Jazzy's platform) ships
     install_requires=[
         'setuptools',
         'numpy>=1.26',
-        'scipy>=1.11',
+        'scipy>=1.12',
         'scikit-learn>=1.4',
         'joblib>=1.3',
         'tqdm>=4.66',
-        'open3d>=0.18',
-        'rosbags>=0.10',
+        'open3d>=0.19',
+        'rosbags>=0.11',
     ],
     extras_require={'test': ['pytest', 'hypothesis']},
     zip_safe=False,
