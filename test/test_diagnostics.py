@@ -149,3 +149,32 @@ def test_detections_carry_the_confidence_as_their_score(monkeypatch):
     out = detections_msg(result, Header(frame_id='cam'))
     hyp = out.detections[0].results[0].hypothesis
     assert hyp.score == pytest.approx(0.37) and hyp.class_id == 'chair_0001'
+
+
+def test_a_rejected_answer_publishes_nothing_but_its_timings_count(model, monkeypatch):
+    rejected = PoseResult('chair_0001', 'chair', np.eye(3), np.zeros(3), confidence=0.2,
+                          rejected=True, reason='confidence 0.20 below 0.50',
+                          timings={'features': 0.01, 'total': 0.3})
+    monkeypatch.setattr(model, 'estimate', lambda *args, **kwargs: rejected)
+
+    class Recorder:
+        def __init__(self):
+            self.sent = []
+
+        def publish(self, msg):
+            self.sent.append(msg)
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx)
+        try:
+            answerer = node.answerer
+            recorders = {k: Recorder() for k in answerer._pubs['segmented_object']}
+            monkeypatch.setitem(answerer._pubs, 'segmented_object', recorders)
+            answerer.answer('segmented_object', (Header(), np.zeros((40, 3)), 0.0),
+                            answerer.engine)
+            assert all(not r.sent for r in recorders.values())
+            snap = node.stats['segmented_object'].snapshot()
+            assert snap['rejected_low_confidence'] == 1 and 'answered' not in snap
+            assert snap['stage_total_p50_ms'] == pytest.approx(300.0)
+            assert 'confidence_last' not in snap   # confidences are of published answers
+        finally:
+            node.destroy_node()
