@@ -17,8 +17,9 @@ Turn "double-quoted" strings into 'single-quoted' ones, as ament's flake8 wants 
 
 Only strings whose text holds no quote character of either kind are changed, so no escaping
 changes; triple-quoted strings (docstrings) and strings standing alone as a statement are left
-as they are, and nothing is rewrapped or moved. Each file's syntax tree is compared before and
-after, and a file whose tree would change is left untouched. Usage:
+as they are, and nothing is rewrapped or moved (from Python 3.12 on, f-strings are tokenized in
+parts and left alone). Each file's syntax tree is compared before and after, and a file whose
+tree would change is left untouched. Usage:
 
     python tools/single_quotes.py [--check] PATH...
 
