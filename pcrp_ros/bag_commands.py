@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """`pcrp make-bag | process | replay`: the rosbag side of the command line."""
 from __future__ import annotations
 
@@ -8,7 +22,8 @@ import time
 import numpy as np
 
 START_NS = 1_700_000_000 * 10**9   # bags start at a fixed time so they are reproducible
-# a level camera's optical frame (x right, y down, z forward) looking at a z-up object standing upright
+# a level camera's optical frame (x right, y down, z forward) looking at a z-up object standing
+# upright
 LEVEL_CAMERA = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 UP_IN_LEVEL_CAMERA = [0.0, -1.0, 0.0]
 
@@ -18,117 +33,187 @@ def _rotation_error(R_est, R_true) -> float:
     return float(np.degrees(np.arccos(np.clip(c, -1, 1))))
 
 
-# -- make-bag ---------------------------------------------------------------------------------------
-def make_bag(out, source="procedural:20", split="train", count=30, rate=5.0, topic="segmented_object",
-             seed=0, partial=True, noise=0.003, frame="camera_optical_frame", storage="sqlite3",
-             upright: bool = False) -> int:
-    """upright: objects stand upright, turned about the vertical only, before a level camera
-    (up is UP_IN_LEVEL_CAMERA in its frame); otherwise they are turned every way."""
+# -- make-bag -------------------------------------------------------------------------------------
+def make_bag(
+    out,
+    source='procedural:20',
+    split='train',
+    count=30,
+    rate=5.0,
+    topic='segmented_object',
+    seed=0,
+    partial=True,
+    noise=0.003,
+    frame='camera_optical_frame',
+    storage='sqlite3',
+    upright: bool = False,
+) -> int:
+    """
+    Write a bag of object clouds with their ground truth.
+
+    upright: objects stand upright, turned about the vertical only, before a level camera
+    (up is UP_IN_LEVEL_CAMERA in its frame); otherwise they are turned every way.
+    """
     from scipy.spatial.transform import Rotation
     from pcrp_core.sources import load_source
     from pcrp_core.sources.views import random_rotation, sensor_view
     from pcrp_ros.bags import BagWriter, cloud_msg, header, T
 
     objects = load_source(source, split=split)
-    if upright and any(o.up != "z" for o in objects):
-        raise ValueError(f"{source}: --upright needs z-up objects (ModelNet40 archives or the generator)")
+    if upright and any(o.up != 'z' for o in objects):
+        raise ValueError(
+            f'{source}: --upright needs z-up objects (ModelNet40 archives or the generator)'
+        )
     rng = np.random.default_rng(seed)
     order = rng.permutation(len(objects))
     with BagWriter(out, storage) as bag:
         for k in range(count):
             obj = objects[order[k % len(objects)]]
             if upright:
-                R = LEVEL_CAMERA @ Rotation.from_euler("z", rng.uniform(0.0, 2 * np.pi)).as_matrix()
+                R = (
+                    LEVEL_CAMERA
+                    @ Rotation.from_euler('z', rng.uniform(0.0, 2 * np.pi)).as_matrix()
+                )
             else:
                 R = random_rotation(rng)
             # in front of the camera (optical frame: z forward), about three object radii away
             radius = float(np.linalg.norm(obj.points - obj.points.mean(0), axis=1).max())
-            t = np.array([rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(2.5, 3.5)]) * radius
+            t = (
+                np.array([rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(2.5, 3.5)])
+                * radius
+            )
             pts = obj.points.astype(np.float64) @ R.T + t
             if partial:
                 pts = sensor_view(pts, np.zeros(3), rng, noise * radius)
             ts = START_NS + int(k * 1e9 / rate)
             sec, nsec = divmod(ts, 10**9)
             bag.write(topic, cloud_msg(pts, header(sec, nsec, frame)), ts)
-            gt = {"stamp": [sec, nsec], "gallery_id": obj.gallery_id, "category": obj.category,
-                  "rotation": R.tolist(), "translation": t.tolist()}
-            bag.write(f"{topic}/ground_truth", T["std_msgs/msg/String"](data=json.dumps(gt)), ts)
+            gt = {'stamp': [sec, nsec], 'gallery_id': obj.gallery_id, 'category': obj.category,
+                  'rotation': R.tolist(), 'translation': t.tolist()}
+            bag.write(f'{topic}/ground_truth', T['std_msgs/msg/String'](data=json.dumps(gt)), ts)
     return count
 
 
 def register_make_bag(sub) -> None:
-    p = sub.add_parser("make-bag", help="write a rosbag2 of segmented-object clouds with ground truth")
-    p.add_argument("--out", required=True, help="bag directory to create")
-    p.add_argument("--source", default="procedural:20", help="procedural[:N] or a ModelNet40 archive (default procedural:20)")
-    p.add_argument("--split", default="train", choices=["train", "test"],
+    p = sub.add_parser(
+        'make-bag', help='write a rosbag2 of segmented-object clouds with ground truth'
+    )
+    p.add_argument('--out', required=True, help='bag directory to create')
+    p.add_argument(
+        '--source',
+        default='procedural:20',
+        help='procedural[:N] or a ModelNet40 archive (default procedural:20)',
+    )
+    p.add_argument('--split', default='train', choices=['train', 'test'],
                    help="train: the gallery's own objects (IDs checkable); test: unseen objects")
-    p.add_argument("--count", type=int, default=30)
-    p.add_argument("--rate", type=float, default=5.0, help="clouds per second")
-    p.add_argument("--topic", default="segmented_object")
-    p.add_argument("--frame", default="camera_optical_frame")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--full", action="store_true", help="complete objects instead of one-sided depth-camera views")
-    p.add_argument("--noise", type=float, default=0.003, help="range noise, in object radii (default 0.003)")
-    p.add_argument("--storage", default="sqlite3", choices=["sqlite3", "mcap"])
-    p.add_argument("--upright", action="store_true",
-                   help="objects standing upright, turned about the vertical only, before a level camera "
-                        "(then up is 0,-1,0 in the clouds' frame: the node's up_vector, process --up=0,-1,0)")
+    p.add_argument('--count', type=int, default=30)
+    p.add_argument('--rate', type=float, default=5.0, help='clouds per second')
+    p.add_argument('--topic', default='segmented_object')
+    p.add_argument('--frame', default='camera_optical_frame')
+    p.add_argument('--seed', type=int, default=0)
+    p.add_argument(
+        '--full',
+        action='store_true',
+        help='complete objects instead of one-sided depth-camera views',
+    )
+    p.add_argument(
+        '--noise', type=float, default=0.003, help='range noise, in object radii (default 0.003)'
+    )
+    p.add_argument('--storage', default='sqlite3', choices=['sqlite3', 'mcap'])
+    p.add_argument(
+        '--upright',
+        action='store_true',
+        help='objects standing upright, turned about the vertical only, before a level camera '
+        "(then up is 0,-1,0 in the clouds' frame: the node's up_vector, process --up=0,-1,0)",
+    )
     p.set_defaults(func=_make_bag)
 
 
 def _make_bag(a) -> int:
     try:
-        n = make_bag(a.out, a.source, a.split, a.count, a.rate, a.topic, a.seed, not a.full, a.noise, a.frame,
-                     a.storage, a.upright)
+        n = make_bag(
+            a.out,
+            a.source,
+            a.split,
+            a.count,
+            a.rate,
+            a.topic,
+            a.seed,
+            not a.full,
+            a.noise,
+            a.frame,
+            a.storage,
+            a.upright,
+        )
     except ValueError as e:
-        print(f"pcrp: error: {e}", file=sys.stderr)
+        print(f'pcrp: error: {e}', file=sys.stderr)
         return 2
-    print(f"wrote {n} clouds to {a.out}")
+    print(f'wrote {n} clouds to {a.out}')
     return 0
 
 
-# -- process ----------------------------------------------------------------------------------------
+# -- process --------------------------------------------------------------------------------------
 def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None, up=None):
-    """Run the core over every cloud of a bag (or of the given topics); write the node's outputs
-    into `out`; return rows. Unreadable clouds become rows with their reason, never a stop.
-    up: which way is up in the clouds' frame, as the node's up_vector (None: unknown)."""
+    """
+    Run the core over every cloud of a bag (or of the given topics).
+
+    Writes the node's outputs into `out` and returns rows. Unreadable clouds become rows with
+    their reason, never a stop. up: which way is up in the clouds' frame, as the node's
+    up_vector (None: unknown).
+    """
     from pcrp_core import InvalidCloud
     from pcrp_ros.bags import BagWriter, cloud_msg, pose_msg, read_bag, T
     from pcrp_ros.conversions import aligned_points
 
     clouds, truths, problems = read_bag(bag, topics)
     for p in problems:
-        print(f"pcrp: {bag}: {p}", file=sys.stderr)
+        print(f'pcrp: {bag}: {p}', file=sys.stderr)
     rows = []
     with BagWriter(out) as writer:
         for c in clouds:
-            hdr = c["msg"].header
-            row = {"topic": c["topic"], "stamp": f"{hdr.stamp.sec}.{hdr.stamp.nanosec:09d}"}
-            gt = truths.get((c["topic"], hdr.stamp.sec, hdr.stamp.nanosec))
-            if c["error"] is not None:
+            hdr = c['msg'].header
+            row = {'topic': c['topic'], 'stamp': f'{hdr.stamp.sec}.{hdr.stamp.nanosec:09d}'}
+            gt = truths.get((c['topic'], hdr.stamp.sec, hdr.stamp.nanosec))
+            if c['error'] is not None:
                 row.update(status=f"rejected: {c['error'].reason}")
             else:
                 try:
                     t0 = time.perf_counter()
-                    r = model.estimate(c["points"], viewpoint=np.zeros(3) if sensor_at_origin else None, up=up)
-                    row["latency_ms"] = 1e3 * (time.perf_counter() - t0)
+                    r = model.estimate(
+                        c['points'], viewpoint=np.zeros(3) if sensor_at_origin else None, up=up
+                    )
+                    row['latency_ms'] = 1e3 * (time.perf_counter() - t0)
                 except InvalidCloud as e:
-                    r, row["status"] = None, f"rejected: {e.reason}"
+                    r, row['status'] = None, f'rejected: {e.reason}'
                 except Exception as e:  # as in the node: one cloud must not end the run
-                    r, row["status"] = None, "rejected: internal_error"
-                    print(f"pcrp: {bag}: {c['topic']} @ {row['stamp']}: {type(e).__name__}: {e}", file=sys.stderr)
+                    r, row['status'] = None, 'rejected: internal_error'
+                    print(
+                        f"pcrp: {bag}: {c['topic']} @ {row['stamp']}: {type(e).__name__}: {e}",
+                        file=sys.stderr,
+                    )
                 if r is not None:
-                    row.update(status="rejected: low_confidence" if r.rejected else "ok", gallery_id=r.gallery_id,
-                               category=r.category, score=r.score)
+                    row.update(
+                        status='rejected: low_confidence' if r.rejected else 'ok',
+                        gallery_id=r.gallery_id,
+                        category=r.category,
+                        score=r.score,
+                    )
                     if not r.rejected:
-                        writer.write(f"{c['topic']}/pose", pose_msg(r, hdr), c["timestamp"])
-                        writer.write(f"{c['topic']}/gallery_id", T["std_msgs/msg/String"](data=r.gallery_id), c["timestamp"])
-                        writer.write(f"{c['topic']}/aligned_model",
-                                     cloud_msg(aligned_points(r, model.gallery_cloud(r.gallery_id)), hdr), c["timestamp"])
+                        writer.write(f"{c['topic']}/pose", pose_msg(r, hdr), c['timestamp'])
+                        writer.write(
+                            f"{c['topic']}/gallery_id",
+                            T['std_msgs/msg/String'](data=r.gallery_id),
+                            c['timestamp'],
+                        )
+                        writer.write(
+                            f"{c['topic']}/aligned_model",
+                            cloud_msg(aligned_points(r, model.gallery_cloud(r.gallery_id)), hdr),
+                            c['timestamp'],
+                        )
                     if gt:
-                        row["rot_err"] = _rotation_error(r.rotation, gt["rotation"])
+                        row['rot_err'] = _rotation_error(r.rotation, gt['rotation'])
             if gt:
-                row.update(true_id=gt["gallery_id"], true_category=gt["category"])
+                row.update(true_id=gt['gallery_id'], true_category=gt['category'])
             rows.append(row)
             if not quiet:
                 print(format_row(row), flush=True)
@@ -136,45 +221,57 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
 
 
 def format_row(row) -> str:
-    err = f"{row['rot_err']:7.1f}" if "rot_err" in row else "      -"
-    lat = f"{row['latency_ms']:7.0f}" if "latency_ms" in row else "      -"
+    err = f"{row['rot_err']:7.1f}" if 'rot_err' in row else '      -'
+    lat = f"{row['latency_ms']:7.0f}" if 'latency_ms' in row else '      -'
     return (f"{row['topic'][:22]:22s} {row['stamp']:>21s} {row.get('true_id', '-')[:18]:18s} "
             f"{row.get('gallery_id', '-')[:18]:18s} {err} {lat}  {row.get('status', '')}")
 
 
-HEADER = f"{'topic':22s} {'stamp':>21s} {'true id':18s} {'retrieved id':18s} {'rot err':>7s} {'lat ms':>7s}  status"
+HEADER = (f"{'topic':22s} {'stamp':>21s} {'true id':18s} {'retrieved id':18s} "
+          f"{'rot err':>7s} {'lat ms':>7s}  status")
 
 
 def summary(rows) -> str:
     n = len(rows)
-    ok = [r for r in rows if r.get("status") == "ok"]
-    lines = [f"clouds {n}, answered {len(ok)}, rejected {n - len(ok)}"]
+    ok = [r for r in rows if r.get('status') == 'ok']
+    lines = [f'clouds {n}, answered {len(ok)}, rejected {n - len(ok)}']
     reasons = {}
     for r in rows:
-        if r.get("status", "").startswith("rejected"):
-            reasons[r["status"]] = reasons.get(r["status"], 0) + 1
-    lines += [f"  {k}: {v}" for k, v in sorted(reasons.items())]
-    lat = [r["latency_ms"] for r in rows if "latency_ms" in r]
+        if r.get('status', '').startswith('rejected'):
+            reasons[r['status']] = reasons.get(r['status'], 0) + 1
+    lines += [f'  {k}: {v}' for k, v in sorted(reasons.items())]
+    lat = [r['latency_ms'] for r in rows if 'latency_ms' in r]
     if lat:
-        lines.append(f"latency ms: median {np.median(lat):.0f}, 95th percentile {np.percentile(lat, 95):.0f}")
-    withgt = [r for r in ok if "true_id" in r]
+        lines.append(f'latency ms: median {np.median(lat):.0f}, '
+                     f'95th percentile {np.percentile(lat, 95):.0f}')
+    withgt = [r for r in ok if 'true_id' in r]
     if withgt:
-        err = np.array([r["rot_err"] for r in withgt])
-        lines.append(f"accuracy on answered clouds ({len(withgt)}): category {np.mean([r['category'] == r['true_category'] for r in withgt]):.0%}, "
-                     f"gallery ID {np.mean([r['gallery_id'] == r['true_id'] for r in withgt]):.0%}, rotation error "
-                     f"mean {err.mean():.1f} deg, median {np.median(err):.1f} deg, under 10 deg {np.mean(err < 10):.0%}")
-    return "\n".join(lines)
+        err = np.array([r['rot_err'] for r in withgt])
+        category = np.mean([r['category'] == r['true_category'] for r in withgt])
+        gallery_id = np.mean([r['gallery_id'] == r['true_id'] for r in withgt])
+        lines.append(
+            f'accuracy on answered clouds ({len(withgt)}): category {category:.0%}, '
+            f'gallery ID {gallery_id:.0%}, rotation error mean {err.mean():.1f} deg, '
+            f'median {np.median(err):.1f} deg, under 10 deg {np.mean(err < 10):.0%}')
+    return '\n'.join(lines)
 
 
 def register_process(sub) -> None:
-    p = sub.add_parser("process", help="run PCRP over a bag offline and write the node's outputs to a new bag")
-    p.add_argument("bag")
-    p.add_argument("--out", required=True, help="results bag directory to create")
-    p.add_argument("--model", default=None, help="model directory (default: the shipped model)")
-    p.add_argument("--complete-objects", action="store_true",
+    p = sub.add_parser(
+        'process', help="run PCRP over a bag offline and write the node's outputs to a new bag"
+    )
+    p.add_argument('bag')
+    p.add_argument('--out', required=True, help='results bag directory to create')
+    p.add_argument('--model', default=None, help='model directory (default: the shipped model)')
+    p.add_argument('--complete-objects', action='store_true',
                    help="clouds are complete objects, not one sensor's view from the frame origin")
-    p.add_argument("--topics", nargs="*", default=None, help="cloud topics to answer (default: every PointCloud2 topic)")
-    p.add_argument("--up", default=None, metavar="X,Y,Z",
+    p.add_argument(
+        '--topics',
+        nargs='*',
+        default=None,
+        help='cloud topics to answer (default: every PointCloud2 topic)',
+    )
+    p.add_argument('--up', default=None, metavar='X,Y,Z',
                    help="which way is up in the clouds' frame, as the node's up_vector")
     p.set_defaults(func=_process)
 
@@ -188,21 +285,33 @@ def _process(args) -> int:
         model = PCRP.load(args.model)
         up = parse_up(args.up)
         if up is not None:
-            model.check_up(up)   # a model without an up axis, or a zero vector: say so before any cloud
+            model.check_up(
+                up
+            )  # a model without an up axis, or a zero vector: say so before any cloud
     except (ModelError, ValueError) as e:
-        print(f"pcrp: error: {e}", file=sys.stderr)
+        print(f'pcrp: error: {e}', file=sys.stderr)
         return 2
     print(HEADER)
-    rows = process_bag(args.bag, args.out, model, sensor_at_origin=not args.complete_objects, topics=args.topics, up=up)
+    rows = process_bag(
+        args.bag,
+        args.out,
+        model,
+        sensor_at_origin=not args.complete_objects,
+        topics=args.topics,
+        up=up,
+    )
     print(summary(rows))
-    return 0 if rows else 1     # a partial read is reported above; nothing read at all is a failure
+    return 0 if rows else 1  # a partial read is reported above; nothing read at all is a failure
 
 
-# -- replay and demo ----------------------------------------------------------------------------------
+# -- replay and demo ------------------------------------------------------------------------------
 def replay(node, bag, rate_factor=1.0, restamp=True, topics=None, on_publish=None):
-    """Publish a bag's clouds from `node` at the recorded rate (times rate_factor). With restamp,
-    each header gets the current time (so ages and latencies are live); on_publish(cloud, msg)
-    is told each cloud sent. Returns the number of clouds published."""
+    """
+    Publish a bag's clouds from `node` at the recorded rate (times rate_factor).
+
+    With restamp, each header gets the current time (so ages and latencies are live);
+    on_publish(cloud, msg) is told each cloud sent. Returns the number of clouds published.
+    """
     from rclpy.qos import QoSProfile
     from sensor_msgs.msg import PointCloud2, PointField
     from std_msgs.msg import Header
@@ -210,39 +319,62 @@ def replay(node, bag, rate_factor=1.0, restamp=True, topics=None, on_publish=Non
 
     clouds, _, problems = read_bag(bag, topics)
     for p in problems:
-        print(f"pcrp: {bag}: {p}", file=sys.stderr)
+        print(f'pcrp: {bag}: {p}', file=sys.stderr)
     # reliable publishers match best-effort and reliable subscribers alike
-    pubs = {t: node.create_publisher(PointCloud2, t, QoSProfile(depth=10)) for t in {c["topic"] for c in clouds}}
+    pubs = {
+        t: node.create_publisher(PointCloud2, t, QoSProfile(depth=10))
+        for t in {c['topic'] for c in clouds}
+    }
     deadline = time.monotonic() + 5.0
-    while time.monotonic() < deadline and not all(p.get_subscription_count() for p in pubs.values()):
+    while time.monotonic() < deadline and not all(
+        p.get_subscription_count() for p in pubs.values()
+    ):
         time.sleep(0.05)
-    t0_bag, t0 = (clouds[0]["timestamp"] if clouds else 0), time.monotonic()
+    t0_bag, t0 = (clouds[0]['timestamp'] if clouds else 0), time.monotonic()
     for c in clouds:
-        delay = (c["timestamp"] - t0_bag) * 1e-9 / rate_factor - (time.monotonic() - t0)
+        delay = (c['timestamp'] - t0_bag) * 1e-9 / rate_factor - (time.monotonic() - t0)
         if delay > 0:
             time.sleep(delay)
-        src = c["msg"]
-        msg = PointCloud2(height=src.height, width=src.width, is_bigendian=src.is_bigendian,
-                          point_step=src.point_step, row_step=src.row_step, is_dense=src.is_dense,
-                          fields=[PointField(name=f.name, offset=f.offset, datatype=f.datatype, count=f.count) for f in src.fields],
-                          data=bytes(src.data))
+        src = c['msg']
+        msg = PointCloud2(
+            height=src.height,
+            width=src.width,
+            is_bigendian=src.is_bigendian,
+            point_step=src.point_step,
+            row_step=src.row_step,
+            is_dense=src.is_dense,
+            fields=[
+                PointField(name=f.name, offset=f.offset, datatype=f.datatype, count=f.count)
+                for f in src.fields
+            ],
+            data=bytes(src.data),
+        )
         msg.header = Header(frame_id=src.header.frame_id)
         if restamp:
             msg.header.stamp = node.get_clock().now().to_msg()
         else:
-            msg.header.stamp.sec, msg.header.stamp.nanosec = src.header.stamp.sec, src.header.stamp.nanosec
+            msg.header.stamp.sec, msg.header.stamp.nanosec = (
+                src.header.stamp.sec,
+                src.header.stamp.nanosec,
+            )
         if on_publish:
             on_publish(c, msg)
-        pubs[c["topic"]].publish(msg)
+        pubs[c['topic']].publish(msg)
     return len(clouds)
 
 
 def register_replay(sub) -> None:
-    p = sub.add_parser("replay", help="publish a bag's clouds to the live node at the recorded rate")
-    p.add_argument("bag")
-    p.add_argument("--rate-factor", type=float, default=1.0, help="2.0 plays twice as fast")
-    p.add_argument("--topics", nargs="*", default=None)
-    p.add_argument("--keep-stamps", action="store_true", help="publish the recorded stamps instead of the current time")
+    p = sub.add_parser(
+        'replay', help="publish a bag's clouds to the live node at the recorded rate"
+    )
+    p.add_argument('bag')
+    p.add_argument('--rate-factor', type=float, default=1.0, help='2.0 plays twice as fast')
+    p.add_argument('--topics', nargs='*', default=None)
+    p.add_argument(
+        '--keep-stamps',
+        action='store_true',
+        help='publish the recorded stamps instead of the current time',
+    )
     p.set_defaults(func=_replay)
 
 
@@ -250,11 +382,11 @@ def _replay(args) -> int:
     import rclpy
 
     rclpy.init()
-    node = rclpy.create_node("pcrp_replay")
+    node = rclpy.create_node('pcrp_replay')
     n = 0
     try:
         n = replay(node, args.bag, args.rate_factor, not args.keep_stamps, args.topics)
-        print(f"published {n} clouds from {args.bag}")
+        print(f'published {n} clouds from {args.bag}')
     except KeyboardInterrupt:
         return 0
     finally:

@@ -1,4 +1,21 @@
-"""rosbag2 files without a ROS install (the `rosbags` library): object clouds in, results out.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Read and write rosbag2 files without a ROS install (the `rosbags` library).
+
+Object clouds in, results out.
 
 A bag made by `pcrp make-bag` holds, per cloud topic T, PointCloud2 messages on T and the
 ground truth on T/ground_truth as std_msgs/String JSON ({"stamp": [sec, nanosec], "gallery_id",
@@ -11,46 +28,59 @@ import logging
 from pathlib import Path
 
 import numpy as np
-from rosbags.rosbag2 import Reader, StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
-
 from pcrp_ros.conversions import CloudFormatError, pack_points, pointcloud2_to_xyz
 from pcrp_ros.mcap_salvage import salvage
+from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+from rosbags.typesys import get_typestore, Stores
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
-CLOUD = "sensor_msgs/msg/PointCloud2"
-STRING = "std_msgs/msg/String"
-POSE = "geometry_msgs/msg/PoseStamped"
-log = logging.getLogger("pcrp.bags")
+CLOUD = 'sensor_msgs/msg/PointCloud2'
+STRING = 'std_msgs/msg/String'
+POSE = 'geometry_msgs/msg/PoseStamped'
+log = logging.getLogger('pcrp.bags')
 T = TYPESTORE.types
 
 
 def header(sec: int, nanosec: int, frame: str):
-    return T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec), frame_id=frame)
+    return T['std_msgs/msg/Header'](
+        stamp=T['builtin_interfaces/msg/Time'](sec=sec, nanosec=nanosec), frame_id=frame
+    )
 
 
 def cloud_msg(points, hdr):
     fields, step, data = pack_points(points)
     n = len(data) // step
-    return T[CLOUD](header=hdr, height=1, width=n,
-                    fields=[T["sensor_msgs/msg/PointField"](name=a, offset=o, datatype=d, count=c) for a, o, d, c in fields],
-                    is_bigendian=False, point_step=step, row_step=step * n,
-                    data=np.frombuffer(data, dtype=np.uint8), is_dense=True)
+    return T[CLOUD](
+        header=hdr,
+        height=1,
+        width=n,
+        fields=[
+            T['sensor_msgs/msg/PointField'](name=a, offset=o, datatype=d, count=c)
+            for a, o, d, c in fields
+        ],
+        is_bigendian=False,
+        point_step=step,
+        row_step=step * n,
+        data=np.frombuffer(data, dtype=np.uint8),
+        is_dense=True,
+    )
 
 
 def pose_msg(result, hdr):
     q = result.quaternion
     tr = np.asarray(result.translation, dtype=float)
-    pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=tr[0], y=tr[1], z=tr[2]),
-                                       orientation=T["geometry_msgs/msg/Quaternion"](x=q[0], y=q[1], z=q[2], w=q[3]))
+    pose = T['geometry_msgs/msg/Pose'](
+        position=T['geometry_msgs/msg/Point'](x=tr[0], y=tr[1], z=tr[2]),
+        orientation=T['geometry_msgs/msg/Quaternion'](x=q[0], y=q[1], z=q[2], w=q[3]),
+    )
     return T[POSE](header=hdr, pose=pose)
 
 
 class BagWriter:
     """Writes messages by topic, adding each topic's connection on first use."""
 
-    def __init__(self, path, storage: str = "sqlite3"):
-        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    def __init__(self, path, storage: str = 'sqlite3'):
+        plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
         self._writer = Writer(Path(path), version=9, storage_plugin=plugin)
         self._conns = {}
 
@@ -69,14 +99,17 @@ class BagWriter:
 
 
 def _messages(path: Path, problems: list[str]):
-    """(topic, msgtype, timestamp, raw CDR) of the bag's messages. A bag rosbags cannot open
-    whole is read as far as it goes when it is MCAP (a recording cut short); an SQLite file
-    cut short cannot be read at all (its page count no longer matches)."""
+    """
+    (topic, msgtype, timestamp, raw CDR) of the bag's messages.
+
+    A bag rosbags cannot open whole is read as far as it goes when it is MCAP (a recording cut
+    short); an SQLite file cut short cannot be read at all (its page count no longer matches).
+    """
     try:
         with Reader(path) as reader:
             types = {c.topic: c.msgtype for c in reader.connections}
             other = sorted(t for t, m in types.items() if m not in (CLOUD, STRING) or
-                           (m == STRING and not t.endswith("/ground_truth")))
+                           (m == STRING and not t.endswith('/ground_truth')))
             if other:
                 problems.append(f"ignored topics of other types: {', '.join(other)}")
             wanted = [c for c in reader.connections if c.topic not in other]
@@ -84,35 +117,40 @@ def _messages(path: Path, problems: list[str]):
                 for conn, ts, raw in reader.messages(connections=wanted):
                     yield conn.topic, conn.msgtype, ts, raw
             except Exception as e:
-                problems.append(f"stopped reading early: {type(e).__name__}: {e}")
+                problems.append(f'stopped reading early: {type(e).__name__}: {e}')
             return
     except Exception as e:
-        problems.append(f"cannot open bag: {type(e).__name__}: {e}")
-    files = sorted(path.glob("*.mcap")) if path.is_dir() else [path] if path.suffix == ".mcap" else []
+        problems.append(f'cannot open bag: {type(e).__name__}: {e}')
+    files = (
+        sorted(path.glob('*.mcap')) if path.is_dir() else [path] if path.suffix == '.mcap' else []
+    )
     for f in files:
         n = 0
         for topic, msgtype, ts, raw in salvage(f, problems):
             n += 1
-            if msgtype == CLOUD or (msgtype == STRING and topic.endswith("/ground_truth")):
+            if msgtype == CLOUD or (msgtype == STRING and topic.endswith('/ground_truth')):
                 yield topic, msgtype, ts, raw
-        problems.append(f"{f.name}: salvaged {n} messages from the damaged file")
+        problems.append(f'{f.name}: salvaged {n} messages from the damaged file')
 
 
 def read_bag(path, topics=None):
-    """(clouds, truths, problems): clouds are dicts of topic, timestamp, msg, points (or a
-    format error); truths map (topic, sec, nanosec) to ground truth; problems list what could
-    not be read. A damaged bag yields what could be read of it."""
+    """
+    Read (clouds, truths, problems) from a bag; a damaged bag yields what could be read.
+
+    clouds are dicts of topic, timestamp, msg, points (or a format error); truths map (topic,
+    sec, nanosec) to ground truth; problems list what could not be read.
+    """
     clouds, truths, problems = [], {}, []
     skipped = {}
     for topic, msgtype, ts, raw in _messages(Path(path), problems):
         try:
             msg = TYPESTORE.deserialize_cdr(raw, msgtype)
         except Exception as e:  # a damaged message: skip it, keep the rest
-            problems.append(f"{topic} @ {ts}: unreadable message ({type(e).__name__})")
+            problems.append(f'{topic} @ {ts}: unreadable message ({type(e).__name__})')
             continue
         if msgtype == STRING:
             gt = json.loads(msg.data)
-            truths[(topic[: -len("/ground_truth")], *gt["stamp"])] = gt
+            truths[(topic[: -len('/ground_truth')], *gt['stamp'])] = gt
         elif topics is not None and topic not in topics:
             skipped[topic] = skipped.get(topic, 0) + 1
         else:
@@ -120,13 +158,15 @@ def read_bag(path, topics=None):
                 pts, err = pointcloud2_to_xyz(msg, finite_only=False), None
             except CloudFormatError as e:
                 pts, err = None, e
-            clouds.append({"topic": topic, "timestamp": ts, "msg": msg, "points": pts, "error": err})
+            clouds.append(
+                {'topic': topic, 'timestamp': ts, 'msg': msg, 'points': pts, 'error': err}
+            )
     if skipped:
-        problems.append("skipped clouds on topics not asked for: "
-                        + ", ".join(f"{t} ({n})" for t, n in sorted(skipped.items())))
-    absent = sorted(set(topics or ()) - {c["topic"] for c in clouds})
+        problems.append('skipped clouds on topics not asked for: '
+                        + ', '.join(f'{t} ({n})' for t, n in sorted(skipped.items())))
+    absent = sorted(set(topics or ()) - {c['topic'] for c in clouds})
     if absent:
         problems.append(f"no clouds on the topics asked for: {', '.join(absent)}")
     if not clouds and not absent:
-        problems.append("no PointCloud2 messages found")
+        problems.append('no PointCloud2 messages found')
     return clouds, truths, problems

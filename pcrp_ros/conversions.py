@@ -1,4 +1,19 @@
-"""PointCloud2 <-> numpy and PoseResult -> geometry_msgs, without sensor_msgs_py.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+PointCloud2 <-> numpy and PoseResult -> geometry_msgs, without sensor_msgs_py.
 
 Reading works on anything shaped like a PointCloud2 (rclpy messages and rosbags messages alike:
 only the field names are used), so the node and the offline bag tools share one parser.
@@ -19,9 +34,9 @@ import numpy as np
 # sensor_msgs/PointField datatype constants, written out so this module needs no ROS import
 # for reading (the bag tools may run where rclpy is importable but uninitialised).
 INT8, UINT8, INT16, UINT16, INT32, UINT32, FLOAT32, FLOAT64 = range(1, 9)
-_NUMPY_OF = {INT8: "i1", UINT8: "u1", INT16: "i2", UINT16: "u2", INT32: "i4", UINT32: "u4",
-             FLOAT32: "f4", FLOAT64: "f8"}
-_DATATYPE_OF = {np.dtype(v).newbyteorder("<"): k for k, v in _NUMPY_OF.items()}
+_NUMPY_OF = {INT8: 'i1', UINT8: 'u1', INT16: 'i2', UINT16: 'u2', INT32: 'i4', UINT32: 'u4',
+             FLOAT32: 'f4', FLOAT64: 'f8'}
+_DATATYPE_OF = {np.dtype(v).newbyteorder('<'): k for k, v in _NUMPY_OF.items()}
 
 
 class CloudFormatError(ValueError):
@@ -39,69 +54,101 @@ def _bytes_of(data) -> np.ndarray:
         return np.asarray(data, dtype=np.uint8)
 
 
-def _field_views(msg, names=("x", "y", "z")) -> list[np.ndarray]:
+def _field_views(msg, names=('x', 'y', 'z')) -> list[np.ndarray]:
     """(height, width) strided views of the named fields, after checking the layout."""
     fields = {}
     for f in msg.fields:
         fields.setdefault(f.name, f)  # the first of duplicated names wins
     missing = [n for n in names if n not in fields]
     if missing:
-        raise CloudFormatError("missing_field", f"cloud has no field {', '.join(missing)} "
-                                                f"(fields: {[f.name for f in msg.fields]})")
+        raise CloudFormatError('missing_field', f"cloud has no field {', '.join(missing)} "
+                                                f'(fields: {[f.name for f in msg.fields]})')
     height, width = int(msg.height), int(msg.width)
     point_step, row_step = int(msg.point_step), int(msg.row_step)
-    order = ">" if msg.is_bigendian else "<"
+    order = '>' if msg.is_bigendian else '<'
     dtypes = []
     for n in names:
         f = fields[n]
         if f.datatype not in _NUMPY_OF or f.count < 1:
-            raise CloudFormatError("bad_field_type", f"field {n} has datatype {f.datatype} and count {f.count}")
+            raise CloudFormatError(
+                'bad_field_type', f'field {n} has datatype {f.datatype} and count {f.count}'
+            )
         dt = np.dtype(order + _NUMPY_OF[f.datatype])
         if f.offset + dt.itemsize > point_step:
-            raise CloudFormatError("bad_layout", f"field {n} at offset {f.offset} ({dt.itemsize} bytes) "
-                                                 f"does not fit in point_step {point_step}")
+            raise CloudFormatError(
+                'bad_layout',
+                f'field {n} at offset {f.offset} ({dt.itemsize} bytes) '
+                f'does not fit in point_step {point_step}',
+            )
         dtypes.append(dt)
     if height * width == 0:
         return [np.zeros((height, width), dtype=dt) for dt in dtypes]
     if row_step < width * point_step:
-        raise CloudFormatError("bad_layout", f"row_step {row_step} is less than width {width} x point_step {point_step}")
+        raise CloudFormatError(
+            'bad_layout',
+            f'row_step {row_step} is less than width {width} x point_step {point_step}',
+        )
     buf = _bytes_of(msg.data)
     if len(buf) < row_step * height:
-        raise CloudFormatError("truncated_data", f"data has {len(buf)} bytes, row_step {row_step} x height {height} "
-                                                 f"needs {row_step * height}")
-    return [np.ndarray((height, width), dtype=dt, buffer=buf, offset=fields[n].offset, strides=(row_step, point_step))
-            for n, dt in zip(names, dtypes)]
+        raise CloudFormatError(
+            'truncated_data',
+            f'data has {len(buf)} bytes, row_step {row_step} x height {height} '
+            f'needs {row_step * height}',
+        )
+    return [
+        np.ndarray(
+            (height, width),
+            dtype=dt,
+            buffer=buf,
+            offset=fields[n].offset,
+            strides=(row_step, point_step),
+        )
+        for n, dt in zip(names, dtypes)
+    ]
 
 
 def pointcloud2_to_xyz(msg, finite_only: bool = True) -> np.ndarray:
-    """(N, 3) float64 array of the cloud's points in row-major order; NaN/Inf holes dropped
-    unless finite_only is false (then the caller can tell an all-NaN cloud from an empty one)."""
+    """
+    Read the cloud's points as an (N, 3) float64 array, in row-major order.
+
+    NaN/Inf holes are dropped unless finite_only is false (then the caller can tell an all-NaN
+    cloud from an empty one).
+    """
     x, y, z = _field_views(msg)
     pts = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1).astype(np.float64)
     return pts[np.isfinite(pts).all(axis=1)] if finite_only else pts
 
 
 def pack_points(points, dtype=np.float32, extra_fields=None) -> tuple[list, int, bytes]:
-    """Fields [(name, offset, datatype, count)], point_step and little-endian bytes of an unorganised cloud.
+    """
+    Pack an unorganised cloud: fields [(name, offset, datatype, count)], point_step, bytes.
 
-    extra_fields maps a name to an (N,) or (N, k) array, written after x, y, z in its own dtype.
+    The bytes are little-endian. extra_fields maps a name to an (N,) or (N, k) array, written
+    after x, y, z in its own dtype.
     """
     pts = np.asarray(points, dtype=dtype).reshape(-1, 3)
-    columns = [("x", pts[:, 0:1]), ("y", pts[:, 1:2]), ("z", pts[:, 2:3])]
+    columns = [('x', pts[:, 0:1]), ('y', pts[:, 1:2]), ('z', pts[:, 2:3])]
     for name, values in (extra_fields or {}).items():
         values = np.asarray(values)
         columns.append((name, values.reshape(len(pts), -1)))
     fields, formats, offsets, offset = [], [], [], 0
     for name, values in columns:
-        dt = values.dtype.newbyteorder("<")
+        dt = values.dtype.newbyteorder('<')
         if dt not in _DATATYPE_OF:
-            raise ValueError(f"field {name}: dtype {values.dtype} has no PointField datatype")
+            raise ValueError(f'field {name}: dtype {values.dtype} has no PointField datatype')
         count = values.shape[1]
         fields.append((name, offset, _DATATYPE_OF[dt], count))
         formats.append((dt, (count,)) if count > 1 else dt)
         offsets.append(offset)
         offset += dt.itemsize * count
-    record = np.dtype({"names": [c[0] for c in columns], "formats": formats, "offsets": offsets, "itemsize": offset})
+    record = np.dtype(
+        {
+            'names': [c[0] for c in columns],
+            'formats': formats,
+            'offsets': offsets,
+            'itemsize': offset,
+        }
+    )
     out = np.empty(len(pts), dtype=record)
     for name, values in columns:
         out[name] = values if values.shape[1] > 1 else values[:, 0]
@@ -109,7 +156,7 @@ def pack_points(points, dtype=np.float32, extra_fields=None) -> tuple[list, int,
 
 
 def xyz_to_pointcloud2(points, header, dtype=np.float32, extra_fields=None):
-    """An unorganised (height 1), little-endian sensor_msgs/PointCloud2 of the points."""
+    """Make an unorganised (height 1), little-endian sensor_msgs/PointCloud2 of the points."""
     from sensor_msgs.msg import PointCloud2, PointField
 
     fields, point_step, data = pack_points(points, dtype, extra_fields)
@@ -117,7 +164,10 @@ def xyz_to_pointcloud2(points, header, dtype=np.float32, extra_fields=None):
     msg = PointCloud2()
     msg.header = header
     msg.height, msg.width = 1, n
-    msg.fields = [PointField(name=name, offset=off, datatype=dt, count=count) for name, off, dt, count in fields]
+    msg.fields = [
+        PointField(name=name, offset=off, datatype=dt, count=count)
+        for name, off, dt, count in fields
+    ]
     msg.is_bigendian = False
     msg.point_step, msg.row_step = point_step, point_step * n
     msg.data = data
@@ -132,8 +182,12 @@ def pose_to_msg(result):
     q = np.asarray(result.quaternion, dtype=np.float64)
     q = q / np.linalg.norm(q)
     pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in np.asarray(result.translation))
-    pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = (float(v) for v in q)
+    pose.position.x, pose.position.y, pose.position.z = (
+        float(v) for v in np.asarray(result.translation)
+    )
+    pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = (
+        float(v) for v in q
+    )
     return pose
 
 
@@ -146,18 +200,20 @@ def pose_stamped(result, header):
 def aligned_points(result, gallery_points) -> np.ndarray:
     """Gallery points moved into the query's frame by the result's pose."""
     g = np.asarray(gallery_points, dtype=np.float64)
-    return result.scale * g @ np.asarray(result.rotation, dtype=np.float64).T + np.asarray(result.translation)
+    return result.scale * g @ np.asarray(result.rotation, dtype=np.float64).T + np.asarray(
+        result.translation
+    )
 
 
 def detections_msg(result, header):
-    """vision_msgs/Detection3DArray with one detection, or None where vision_msgs is not installed."""
+    """Make a vision_msgs/Detection3DArray of one detection (None without vision_msgs)."""
     try:
         from vision_msgs.msg import Detection3D, Detection3DArray, ObjectHypothesisWithPose
     except ImportError:
         return None
     hyp = ObjectHypothesisWithPose()
     hyp.hypothesis.class_id = result.gallery_id
-    hyp.hypothesis.score = float(result.score)
+    hyp.hypothesis.score = float(result.confidence)   # how likely the answer is right
     hyp.pose.pose = pose_to_msg(result)
     det = Detection3D(header=header)
     det.results = [hyp]

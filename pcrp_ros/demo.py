@@ -1,13 +1,27 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """`make demo`: the node with the shipped model answers the shipped bag, live over DDS."""
 from __future__ import annotations
 
+from pathlib import Path
 import threading
 import time
-from pathlib import Path
 
 import numpy as np
 
-DEMO_BAG = Path(__file__).resolve().parent / "data" / "demo_bag"
+DEMO_BAG = Path(__file__).resolve().parent / 'data' / 'demo_bag'
 
 
 def run(model_path=None, bag=None, rate_factor=1.0) -> int:
@@ -26,8 +40,11 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     bag = bag or str(DEMO_BAG)
     _, truths, _ = read_bag(bag)
     rclpy.init()
-    node = PcrpNode(model=PCRP.load(model_path), parameter_overrides=[Parameter("sensor_at_origin", value=True)])
-    client = rclpy.create_node("pcrp_demo")
+    node = PcrpNode(
+        model=PCRP.load(model_path),
+        parameter_overrides=[Parameter('sensor_at_origin', value=True)],
+    )
+    client = rclpy.create_node('pcrp_demo')
     sent, rows, lock = {}, [], threading.Lock()
     poses, ids = [], []
 
@@ -39,15 +56,22 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
             if key not in sent:
                 continue
             cloud, t_sent = sent[key]
-            gt = truths.get((cloud["topic"], cloud["msg"].header.stamp.sec, cloud["msg"].header.stamp.nanosec), {})
+            gt = truths.get(
+                (cloud['topic'], cloud['msg'].header.stamp.sec, cloud['msg'].header.stamp.nanosec),
+                {},
+            )
             q = msg.pose.orientation
             R = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
-            row = {"topic": cloud["topic"], "stamp": f"{key[0]}.{key[1]:09d}", "status": "ok",
-                   "latency_ms": 1e3 * (time.monotonic() - t_sent), "gallery_id": gid,
-                   "category": node.model.category_of(gid)}
+            row = {'topic': cloud['topic'], 'stamp': f'{key[0]}.{key[1]:09d}', 'status': 'ok',
+                   'latency_ms': 1e3 * (time.monotonic() - t_sent), 'gallery_id': gid,
+                   'category': node.model.category_of(gid)}
             if gt:
-                err = np.degrees(np.arccos(np.clip((np.trace(R.T @ np.array(gt["rotation"])) - 1) / 2, -1, 1)))
-                row.update(true_id=gt["gallery_id"], true_category=gt["category"], rot_err=float(err))
+                err = np.degrees(
+                    np.arccos(np.clip((np.trace(R.T @ np.array(gt['rotation'])) - 1) / 2, -1, 1))
+                )
+                row.update(
+                    true_id=gt['gallery_id'], true_category=gt['category'], rot_err=float(err)
+                )
             rows.append(row)
             print(format_row(row), flush=True)
 
@@ -61,8 +85,8 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
             ids.append(msg.data)
             pair()
 
-    client.create_subscription(String, "/segmented_object/gallery_id", on_id, 10)
-    client.create_subscription(PoseStamped, "/segmented_object/pose", on_pose, 10)
+    client.create_subscription(String, '/segmented_object/gallery_id', on_id, 10)
+    client.create_subscription(PoseStamped, '/segmented_object/pose', on_pose, 10)
     ex = MultiThreadedExecutor(num_threads=3)
     ex.add_node(node)
     ex.add_node(client)
@@ -76,13 +100,17 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     try:
         n = replay(client, bag, rate_factor, True, None, on_publish)
         end = time.monotonic() + 30.0
-        while time.monotonic() < end and node.stats["segmented_object"].snapshot().get("answered", 0) \
-                + node.stats["segmented_object"].snapshot().get("rejected", 0) \
-                + node.stats["segmented_object"].snapshot().get("dropped_stale", 0) < n:
+        while (
+            time.monotonic() < end
+            and node.stats['segmented_object'].snapshot().get('answered', 0)
+            + node.stats['segmented_object'].snapshot().get('rejected', 0)
+            + node.stats['segmented_object'].snapshot().get('dropped_stale', 0)
+            < n
+        ):
             time.sleep(0.1)
         time.sleep(0.5)
     finally:
-        snap = node.stats["segmented_object"].snapshot()
+        snap = node.stats['segmented_object'].snapshot()
         ex.shutdown(timeout_sec=2.0)
         node.destroy_node()
         client.destroy_node()
@@ -94,8 +122,8 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("demo", help="the node answering the shipped demo bag, live over DDS")
-    p.add_argument("--model", default=None, help="model directory (default: the shipped model)")
-    p.add_argument("--bag", default=str(DEMO_BAG))
-    p.add_argument("--rate-factor", type=float, default=1.0)
+    p = sub.add_parser('demo', help='the node answering the shipped demo bag, live over DDS')
+    p.add_argument('--model', default=None, help='model directory (default: the shipped model)')
+    p.add_argument('--bag', default=str(DEMO_BAG))
+    p.add_argument('--rate-factor', type=float, default=1.0)
     p.set_defaults(func=lambda a: run(a.model, a.bag, a.rate_factor))

@@ -1,5 +1,22 @@
-"""Messages out of an MCAP file whose end is missing: a recorder killed mid-write leaves no
-footer or summary, and readers that start from the summary (rosbags does) refuse the file.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Read the messages out of an MCAP file whose end is missing.
+
+A recorder killed mid-write leaves no footer or summary, and readers that start from the
+summary (rosbags does) refuse the file.
 
 MCAP is a flat sequence of records (opcode u8, length u64, content), messages either at top
 level or inside chunks that hold records in the same form, so reading front to back until
@@ -9,10 +26,10 @@ Record layouts: https://mcap.dev/spec
 """
 from __future__ import annotations
 
-import struct
 from pathlib import Path
+import struct
 
-MAGIC = b"\x89MCAP0\r\n"
+MAGIC = b'\x89MCAP0\r\n'
 SCHEMA, CHANNEL, MESSAGE, CHUNK = 0x03, 0x04, 0x05, 0x06
 
 
@@ -28,23 +45,23 @@ class _Cursor:
         return out
 
     def u16(self) -> int:
-        return struct.unpack("<H", self.take(2))[0]
+        return struct.unpack('<H', self.take(2))[0]
 
     def u32(self) -> int:
-        return struct.unpack("<I", self.take(4))[0]
+        return struct.unpack('<I', self.take(4))[0]
 
     def u64(self) -> int:
-        return struct.unpack("<Q", self.take(8))[0]
+        return struct.unpack('<Q', self.take(8))[0]
 
     def string(self) -> str:
-        return self.take(self.u32()).decode("utf-8", "replace")
+        return self.take(self.u32()).decode('utf-8', 'replace')
 
 
 def salvage(path: Path, problems: list[str]):
-    """Yield (topic, schema name, log_time ns, raw CDR) of every complete message, in file order."""
+    """Yield (topic, schema name, log_time ns, raw CDR) of each complete message, in order."""
     data = Path(path).read_bytes()
     if not data.startswith(MAGIC):
-        problems.append(f"{path.name}: not an MCAP file")
+        problems.append(f'{path.name}: not an MCAP file')
         return
     schemas, channels = {}, {}
     yield from _records(_Cursor(data, len(MAGIC)), schemas, channels, problems, path.name)
@@ -58,11 +75,15 @@ def _records(cur: _Cursor, schemas: dict, channels: dict, problems: list[str], n
             length = cur.u64()
         except EOFError:
             if start < len(cur.data):
-                problems.append(f"{name}: truncated at byte {len(cur.data)}; kept the messages before it")
+                problems.append(
+                    f'{name}: truncated at byte {len(cur.data)}; kept the messages before it'
+                )
             return
         truncated = cur.pos + length > len(cur.data)
         if truncated and opcode != CHUNK:
-            problems.append(f"{name}: truncated at byte {len(cur.data)}; kept the messages before it")
+            problems.append(
+                f'{name}: truncated at byte {len(cur.data)}; kept the messages before it'
+            )
             return
         # a chunk cut short still holds whole messages before the cut
         body = _Cursor(cur.take(min(length, len(cur.data) - cur.pos)))
@@ -72,7 +93,7 @@ def _records(cur: _Cursor, schemas: dict, channels: dict, problems: list[str], n
                 schemas[sid] = body.string()
             elif opcode == CHANNEL:
                 cid, sid = body.u16(), body.u16()
-                channels[cid] = (body.string(), schemas.get(sid, ""))
+                channels[cid] = (body.string(), schemas.get(sid, ''))
             elif opcode == MESSAGE:
                 cid, _, log_time, _ = body.u16(), body.u32(), body.u64(), body.u64()
                 if cid in channels:
@@ -82,12 +103,12 @@ def _records(cur: _Cursor, schemas: dict, channels: dict, problems: list[str], n
                 body.u64(), body.u64(), body.u64(), body.u32()
                 compression = body.string()
                 if compression:
-                    problems.append(f"{name}: skipped a {compression}-compressed chunk")
+                    problems.append(f'{name}: skipped a {compression}-compressed chunk')
                     continue
                 size = body.u64()
                 inner = body.data[body.pos:body.pos + size]
                 yield from _records(_Cursor(inner), schemas, channels, problems, name)
         except EOFError:
-            problems.append(f"{name}: malformed record (opcode {opcode:#x}) skipped")
+            problems.append(f'{name}: malformed record (opcode {opcode:#x}) skipped')
         if truncated:
             return

@@ -1,9 +1,27 @@
-"""The node's parameters: its own settings here, the model's from pcrp_core.config, each defined once.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The node's parameters, each defined once.
+
+Its own settings are here, the model's in pcrp_core.config.
 
 Every parameter is declared with a descriptor made from its setting (description, range, read
-only), so `ros2 param describe` shows the same text and bounds as the README's table and
+only), so `ros2 param describe` shows the same text and bounds as the table in docs/node.md and
 config/pcrp.yaml, which a test holds against these declarations.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -14,90 +32,122 @@ from pcrp_core.config import Options, setting, user_settings
 @dataclass(frozen=True)
 class NodeSettings(Options):
     """What the node itself does, beside the model's settings."""
-    model_path: str = setting("", "Model directory built by `pcrp build`; empty for the shipped default model.",
-                              read_only=True)
-    input_topics: tuple = setting(("segmented_object",), "PointCloud2 topics of segmented objects, one object per "
-                                                         "message.", read_only=True)
-    publish_aligned_model: bool = setting(True, "Publish T/aligned_model, the gallery object moved into the cloud's "
-                                                "frame.")
-    sensor_at_origin: bool = setting(True, "The cloud's frame is the sensor's own (one-sided views seen from its "
-                                           "origin); false for complete objects or clouds in a world frame.")
-    up_vector: tuple = setting((0.0, 0.0, 0.0), "Up (against gravity) in the input clouds' frame, if fixed and known: "
-                                                "[0.0, -1.0, 0.0] for a level camera's optical frame; zeros: unknown. Needs a model "
-                                                "that records its up axis; a tilting camera keeps it current.")
-    qos_reliability: str = setting("best_effort", "Input QoS reliability: best_effort (sensor data) or reliable.",
-                                   choices=("best_effort", "reliable"), read_only=True)
-    qos_depth: int = setting(2, "Input QoS queue depth.", low=1, high=100, read_only=True)
-    log_throttle_sec: float = setting(5.0, "Least seconds between two log lines of one kind.", low=0.0, high=3600.0)
+
+    model_path: str = setting(
+        '', 'Model directory built by `pcrp build`; empty for the shipped default model. Set '
+        'while running, the new model is loaded beside the old one, which answers until they '
+        'are swapped; one that fails to load is refused (logged, in /diagnostics) and the old '
+        'one kept.')
+    input_topics: tuple = setting(
+        ('segmented_object',), 'PointCloud2 topics of segmented objects, one object per '
+        'message.', read_only=True)
+    publish_aligned_model: bool = setting(
+        True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.")
+    sensor_at_origin: bool = setting(
+        True, "The cloud's frame is the sensor's own (one-sided views seen from its origin); "
+        'false for complete objects or clouds in a world frame.')
+    up_vector: tuple = setting(
+        (0.0, 0.0, 0.0), "Up (against gravity) in the input clouds' frame, if fixed and known: "
+        "[0.0, -1.0, 0.0] for a level camera's optical frame; zeros: unknown. Needs a model "
+        'that records its up axis; a tilting camera keeps it current.')
+    qos_reliability: str = setting(
+        'best_effort', 'Input QoS reliability: best_effort (sensor data) or reliable.',
+        choices=('best_effort', 'reliable'), read_only=True)
+    qos_depth: int = setting(2, 'Input QoS queue depth.', low=1, high=100, read_only=True)
+    log_throttle_sec: float = setting(
+        5.0, 'Least seconds between two log lines of one kind.', low=0.0, high=3600.0)
+    workers: int = setting(
+        1, 'Clouds answered at once. 1: in a thread of the node; more: that many worker '
+        'processes, each with its own copy of the model (about one per core).',
+        low=1, high=64, read_only=True)
 
 
-MODEL_SETTINGS = tuple(d["name"] for d in user_settings())
+MODEL_SETTINGS = tuple(d['name'] for d in user_settings())
 
 
 def parameters() -> list[dict]:
-    """Every parameter the node declares, as Options.describe() gives them: the node's own, then
-    the model's (which a parameter update passes to the model)."""
+    """
+    List every parameter the node declares, as Options.describe() gives them.
+
+    The node's own, then the model's (which a parameter update passes to the model).
+    """
     return NodeSettings.describe() + user_settings()
 
 
 def ros_value(value):
-    """A setting's default as a ROS parameter value (tuples become lists)."""
+    """Turn a setting's default into a ROS parameter value (tuples become lists)."""
     return list(value) if isinstance(value, tuple) else value
 
 
 def descriptor(spec: dict):
-    """The ParameterDescriptor of one parameter: its doc, bounds and whether it is read only."""
+    """Make the ParameterDescriptor of one parameter: its doc, bounds, whether read only."""
     from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
-    text = spec["doc"] + (f" One of: {', '.join(spec['choices'])}." if spec.get("choices") else "")
-    d = ParameterDescriptor(name=spec["name"], description=text, read_only=bool(spec.get("read_only")))
-    default, low, high = spec["default"], spec.get("low"), spec.get("high")
+    text = spec['doc'] + (f" One of: {', '.join(spec['choices'])}." if spec.get('choices') else '')
+    d = ParameterDescriptor(
+        name=spec['name'], description=text, read_only=bool(spec.get('read_only'))
+    )
+    default, low, high = spec['default'], spec.get('low'), spec.get('high')
     if low is None and high is None or isinstance(default, (bool, str, tuple)):
         return d
     if isinstance(default, int):
-        d.integer_range = [IntegerRange(from_value=int(low if low is not None else -2**63),
-                                        to_value=int(high if high is not None else 2**63 - 1), step=1)]
+        d.integer_range = [
+            IntegerRange(
+                from_value=int(low if low is not None else -(2**63)),
+                to_value=int(high if high is not None else 2**63 - 1),
+                step=1,
+            )
+        ]
     else:
-        d.floating_point_range = [FloatingPointRange(from_value=float(low if low is not None else -1e308),
-                                                     to_value=float(high if high is not None else 1e308), step=0.0)]
+        d.floating_point_range = [
+            FloatingPointRange(
+                from_value=float(low if low is not None else -1e308),
+                to_value=float(high if high is not None else 1e308),
+                step=0.0,
+            )
+        ]
     return d
 
 
 def _yaml(value) -> str:
     value = ros_value(value)
     if isinstance(value, bool):
-        return "true" if value else "false"
+        return 'true' if value else 'false'
     if isinstance(value, str):
         return f'"{value}"'
     if isinstance(value, list):
-        return "[" + ", ".join(_yaml(v) for v in value) + "]"
+        return '[' + ', '.join(_yaml(v) for v in value) + ']'
     return repr(value)
 
 
 def params_file() -> str:
-    """config/pcrp.yaml as it is committed: every parameter at its default, its doc beside it."""
-    lines = ["# pcrp_node parameters, at their defaults (regenerate: python -m pcrp_ros.parameters yaml)",
-             "# ros2 run pcrp pcrp_node --ros-args --params-file config/pcrp.yaml",
-             "/**:   # any node name, so renamed and scaled-out instances (-r __node:=...) read it too",
-             "  ros__parameters:"]
+    """Make config/pcrp.yaml as committed: every parameter at its default, its doc beside it."""
+    lines = [
+        '# pcrp_node parameters, at their defaults '
+        '(regenerate: python -m pcrp_ros.parameters yaml)',
+        '# ros2 run pcrp pcrp_node --ros-args --params-file config/pcrp.yaml',
+        '/**:   # any node name, so renamed and scaled-out instances (-r __node:=...) read it too',
+        '  ros__parameters:',
+    ]
     for spec in parameters():
-        lines.append(f"    # {spec['doc']}" + (" (read only)" if spec.get("read_only") else ""))
+        lines.append(f"    # {spec['doc']}" + (' (read only)' if spec.get('read_only') else ''))
         lines.append(f"    {spec['name']}: {_yaml(spec['default'])}")
-    return "\n".join(lines) + "\n"
+    return '\n'.join(lines) + '\n'
 
 
 def markdown_table() -> str:
-    """The README's parameter table."""
+    """Make the parameter table of docs/node.md."""
     from pcrp_core.config import bounds_text
 
-    rows = ["| parameter | default | range | what it does |", "|---|---|---|---|"]
+    rows = ['| parameter | default | range | what it does |', '|---|---|---|---|']
     for spec in parameters():
-        ro = " Read only." if spec.get("read_only") else ""
-        rows.append(f"| `{spec['name']}` | `{_yaml(spec['default'])}` | {bounds_text(spec)} | {spec['doc']}{ro} |")
-    return "\n".join(rows) + "\n"
+        ro = ' Read only.' if spec.get('read_only') else ''
+        rows.append(f"| `{spec['name']}` | `{_yaml(spec['default'])}` | {bounds_text(spec)} "
+                    f"| {spec['doc']}{ro} |")
+    return '\n'.join(rows) + '\n'
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     import sys
 
-    print(params_file() if sys.argv[1:] == ["yaml"] else markdown_table(), end="")
+    print(params_file() if sys.argv[1:] == ['yaml'] else markdown_table(), end='')

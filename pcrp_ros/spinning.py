@@ -1,10 +1,27 @@
-"""A node (or several) spinning on their own executor thread in this process, in a context of
-their own: how tests, the demo and the robustness report run the node next to a client."""
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Spin a node (or several) on an executor thread of this process, in a context of their own.
+
+This is how tests, the demo and the robustness report run the node next to a client.
+"""
 from __future__ import annotations
 
+from contextlib import contextmanager
 import threading
 import time
-from contextlib import contextmanager
 
 import rclpy
 from rclpy.executors import MultiThreadedExecutor

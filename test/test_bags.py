@@ -1,88 +1,146 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Bags: make-bag writes clouds with ground truth, process answers them into a results bag."""
 import numpy as np
-import pytest
-
-from pcrp_core import PCRP, default_model_path
+from pcrp_core import default_model_path, PCRP
 from pcrp_ros.bag_commands import make_bag, process_bag, summary
 from pcrp_ros.bags import CLOUD, POSE, read_bag
+import pytest
 from rosbags.rosbag2 import Reader
 
 
-@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
 def test_make_bag_then_process_it(tmp_path, storage):
-    bag = tmp_path / "in"
-    assert make_bag(bag, "procedural:20", count=6, rate=10, seed=3, storage=storage) == 6
+    bag = tmp_path / 'in'
+    assert make_bag(bag, 'procedural:20', count=6, rate=10, seed=3, storage=storage) == 6
     clouds, truths, problems = read_bag(bag)
     assert len(clouds) == 6 and len(truths) == 6 and not problems
     for c in clouds:
-        h = c["msg"].header
-        assert (c["topic"], h.stamp.sec, h.stamp.nanosec) in truths and h.frame_id == "camera_optical_frame"
-        assert c["points"][:, 2].min() > 0.5        # in front of the camera
+        h = c['msg'].header
+        assert (
+            c['topic'],
+            h.stamp.sec,
+            h.stamp.nanosec,
+        ) in truths and h.frame_id == 'camera_optical_frame'
+        assert c['points'][:, 2].min() > 0.5        # in front of the camera
     model = PCRP.load(default_model_path())
-    rows = process_bag(bag, tmp_path / "out", model, quiet=True)
-    assert len(rows) == 6 and all("true_id" in r for r in rows)
-    answered = [r for r in rows if r["status"] == "ok"]
+    rows = process_bag(bag, tmp_path / 'out', model, quiet=True)
+    assert len(rows) == 6 and all('true_id' in r for r in rows)
+    answered = [r for r in rows if r['status'] == 'ok']
     assert len(answered) >= 3
-    assert np.median([r["rot_err"] for r in answered]) < 10.0
-    assert "accuracy on answered clouds" in summary(rows)
-    with Reader(tmp_path / "out") as reader:
+    assert np.median([r['rot_err'] for r in answered]) < 10.0
+    assert 'accuracy on answered clouds' in summary(rows)
+    with Reader(tmp_path / 'out') as reader:
         topics = {c.topic: c.msgtype for c in reader.connections}
-    assert topics["segmented_object/pose"] == POSE and topics["segmented_object/aligned_model"] == CLOUD
+    assert (
+        topics['segmented_object/pose'] == POSE
+        and topics['segmented_object/aligned_model'] == CLOUD
+    )
 
 
 def test_upright_objects_before_a_level_camera_are_answered_upright_when_told_up(tmp_path):
     from pcrp_ros.bag_commands import UP_IN_LEVEL_CAMERA
-    bag = tmp_path / "level"
-    make_bag(bag, "procedural:20", count=20, rate=10, seed=4, upright=True)
+    bag = tmp_path / 'level'
+    make_bag(bag, 'procedural:20', count=20, rate=10, seed=4, upright=True)
     clouds, truths, _ = read_bag(bag)
     model = PCRP.load(default_model_path())
     for gt in truths.values():   # each object's up axis is the camera's up
-        np.testing.assert_allclose(np.array(gt["rotation"]) @ model.up_axis, UP_IN_LEVEL_CAMERA, atol=1e-9)
+        np.testing.assert_allclose(
+            np.array(gt['rotation']) @ model.up_axis, UP_IN_LEVEL_CAMERA, atol=1e-9
+        )
     # most of these views are read right either way; what knowing up removes are the answers
     # turned over (upside down, on their side), which leave the unaided run with more errors past
     # 90 deg (seeds 4-6: 3-4 of 20 told, 6-7 unaided, and those left are front/back half turns)
-    told = process_bag(bag, tmp_path / "told", model, quiet=True, up=UP_IN_LEVEL_CAMERA)
-    unaided = process_bag(bag, tmp_path / "unaided", model, quiet=True)
-    err = {name: np.array([r["rot_err"] for r in rows if "rot_err" in r]) for name, rows in
-           (("told", told), ("unaided", unaided))}
-    assert len(err["told"]) == len(err["unaided"]) == 20
-    assert np.median(err["told"]) < 15.0, err
-    assert np.sum(err["told"] > 90) + 2 <= np.sum(err["unaided"] > 90), err
+    told = process_bag(bag, tmp_path / 'told', model, quiet=True, up=UP_IN_LEVEL_CAMERA)
+    unaided = process_bag(bag, tmp_path / 'unaided', model, quiet=True)
+    err = {name: np.array([r['rot_err'] for r in rows if 'rot_err' in r]) for name, rows in
+           (('told', told), ('unaided', unaided))}
+    assert len(err['told']) == len(err['unaided']) == 20
+    assert np.median(err['told']) < 15.0, err
+    assert np.sum(err['told'] > 90) + 2 <= np.sum(err['unaided'] > 90), err
 
 
 def test_a_recording_cut_short_keeps_its_whole_messages(tmp_path):
     from tools.robustness import truncated_bag
-    mcap, sqlite = tmp_path / "mcap", tmp_path / "sqlite"
-    sent = truncated_bag(mcap, "mcap", keep=0.6)
+    mcap, sqlite = tmp_path / 'mcap', tmp_path / 'sqlite'
+    sent = truncated_bag(mcap, 'mcap', keep=0.6)
     clouds, truths, problems = read_bag(mcap)
     assert 0 < len(clouds) < sent and len(truths) >= len(clouds)
-    assert any("truncated" in p for p in problems) and any("salvaged" in p for p in problems)
-    truncated_bag(sqlite, "sqlite3", keep=0.6)
+    assert any('truncated' in p for p in problems) and any('salvaged' in p for p in problems)
+    truncated_bag(sqlite, 'sqlite3', keep=0.6)
     clouds, _, problems = read_bag(sqlite)
-    assert not clouds and any("cannot open bag" in p for p in problems)
+    assert not clouds and any('cannot open bag' in p for p in problems)
 
 
 def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path, capsys):
     import subprocess
     import sys
     from tools.robustness import mixed_bag
-    bag = tmp_path / "mixed"
+    bag = tmp_path / 'mixed'
     written = mixed_bag(bag)
     clouds, _, problems = read_bag(bag)
-    assert len(clouds) == written["segmented_object"] + written["other/points"]
-    assert problems == ["ignored topics of other types: chatter"]
-    rows = process_bag(bag, tmp_path / "out", PCRP.load(default_model_path()), quiet=True, topics=["segmented_object"])
-    assert [r["status"] for r in rows].count("rejected: missing_field") == 1 and len(rows) == 4
-    assert "skipped clouds on topics not asked for: other/points (3)" in capsys.readouterr().err
-    out = subprocess.run([sys.executable, "-m", "pcrp_ros.cli", "process", str(bag), "--out", str(tmp_path / "none"),
-                          "--topics", "no/such/topic"], capture_output=True, text=True, timeout=120)
-    assert out.returncode == 1 and "no clouds on the topics asked for: no/such/topic" in out.stderr
-    # an unusable up direction stops process before any cloud, with one line; a usable one is passed on
-    out = subprocess.run([sys.executable, "-m", "pcrp_ros.cli", "process", str(bag), "--out", str(tmp_path / "up0"),
-                          "--up=0,0,0"], capture_output=True, text=True, timeout=120)
-    assert out.returncode == 2 and "up must be" in out.stderr and "Traceback" not in out.stderr
+    assert len(clouds) == written['segmented_object'] + written['other/points']
+    assert problems == ['ignored topics of other types: chatter']
+    rows = process_bag(
+        bag,
+        tmp_path / 'out',
+        PCRP.load(default_model_path()),
+        quiet=True,
+        topics=['segmented_object'],
+    )
+    assert [r['status'] for r in rows].count('rejected: missing_field') == 1 and len(rows) == 4
+    assert 'skipped clouds on topics not asked for: other/points (3)' in capsys.readouterr().err
+    out = subprocess.run(
+        [
+            sys.executable,
+            '-m',
+            'pcrp_ros.cli',
+            'process',
+            str(bag),
+            '--out',
+            str(tmp_path / 'none'),
+            '--topics',
+            'no/such/topic',
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 1 and 'no clouds on the topics asked for: no/such/topic' in out.stderr
+    # an unusable up direction stops process before any cloud, with one line; a usable one is
+    # passed on
+    out = subprocess.run(
+        [
+            sys.executable,
+            '-m',
+            'pcrp_ros.cli',
+            'process',
+            str(bag),
+            '--out',
+            str(tmp_path / 'up0'),
+            '--up=0,0,0',
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 2 and 'up must be' in out.stderr and 'Traceback' not in out.stderr
     model, seen = PCRP.load(default_model_path()), []
     estimate = model.estimate
-    model.estimate = lambda points, **kw: seen.append(kw["up"]) or estimate(points, **kw)
-    process_bag(bag, tmp_path / "up", model, quiet=True, topics=["segmented_object"], up=[0.0, -1.0, 0.0])
+    model.estimate = lambda points, **kw: seen.append(kw['up']) or estimate(points, **kw)
+    process_bag(
+        bag, tmp_path / 'up', model, quiet=True, topics=['segmented_object'], up=[0.0, -1.0, 0.0]
+    )
     assert len(seen) == 3 and all(u == [0.0, -1.0, 0.0] for u in seen)

@@ -1,72 +1,93 @@
-"""The node survives what a segmenter, a disk or a busy robot throws at it: every bad cloud of
-the catalogue over DDS, every broken model file at start-up, publishers and instances that come
-and go, and a short soak. The same catalogues write docs/results/ROBUSTNESS.md."""
-import numpy as np
-import pytest
-from rclpy.parameter import Parameter
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-from rosutil import publish_until, ros_context, spinning, wait_for  # noqa: F401 (sets ROS_DOMAIN_ID first)
+"""
+The node survives what a segmenter, a disk or a busy robot throws at it.
+
+Every bad cloud of the catalogue over DDS, every broken model file at start-up, publishers and
+instances that come and go, and a short soak. The same catalogues write
+docs/results/ROBUSTNESS.md.
+"""
+from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
+import numpy as np
+from pcrp_core import default_model_path, ModelError, PCRP
+from pcrp_ros.conversions import xyz_to_pointcloud2
+from pcrp_ros.node import PcrpNode
+import pytest
+from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+# sets ROS_DOMAIN_ID and the discovery range before any context is made
+from rosutil import publish_until, ros_context, spinning, wait_for
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header
-from builtin_interfaces.msg import Time
-
-from pcrp_core import ModelError, PCRP, default_model_path
-from tools.bad_clouds import CASES, CaseRunner, accepted, good_cloud
-from pcrp_ros.conversions import xyz_to_pointcloud2
-from tools.faults import FAULTS, damaged_copy, handled, try_fault
-from pcrp_ros.node import PcrpNode
+from tools.bad_clouds import accepted, CaseRunner, CASES, good_cloud
+from tools.faults import damaged_copy, FAULTS, handled, try_fault
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def model():
     return PCRP.load(default_model_path())
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def runner(model):
     import rclpy
     with ros_context() as ctx:
         node = PcrpNode(model=model, context=ctx)
-        client = rclpy.create_node("pcrp_test_client", context=ctx)
+        client = rclpy.create_node('pcrp_test_client', context=ctx)
         r = CaseRunner(node, client, good_cloud(model))
         with spinning(ctx, node, client):
             assert r.ready()
             yield r
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+@pytest.mark.parametrize('case', CASES, ids=[c.name for c in CASES])
 def test_each_bad_cloud_is_refused_or_answered_and_the_next_good_one_answered(runner, case):
     before = runner.stats.snapshot()
     out = runner.run(case)
     assert accepted(case, out), (out.outcome, out.next_good)
     after = runner.stats.snapshot()
-    assert after["received"] == before.get("received", 0) + 2
-    if out.outcome.startswith("rejected:"):
-        key = "rejected_" + out.outcome.split(":", 1)[1]
+    assert after['received'] == before.get('received', 0) + 2
+    if out.outcome.startswith('rejected:'):
+        key = 'rejected_' + out.outcome.split(':', 1)[1]
         assert after[key] == before.get(key, 0) + 1
 
 
 def test_a_million_point_cloud_is_answered_in_bounded_time(runner):
-    out = runner.run(next(c for c in CASES if c.name == "million_points"))
+    out = runner.run(next(c for c in CASES if c.name == 'million_points'))
     assert out.seconds < 15.0
 
 
-@pytest.mark.parametrize("fault", FAULTS, ids=[f.name for f in FAULTS])
+@pytest.mark.parametrize('fault', FAULTS, ids=[f.name for f in FAULTS])
 def test_a_broken_model_stops_the_node_and_the_cli_with_one_clear_line(fault, tmp_path):
-    cloud = tmp_path / "cloud.npy"
+    cloud = tmp_path / 'cloud.npy'
     np.save(cloud, np.random.default_rng(0).normal(size=(200, 3)))
     with pytest.raises(ModelError, match=fault.words):
         PCRP.load(damaged_copy(fault, default_model_path(), tmp_path))
-    for program in ("node", "cli"):
+    for program in ('node', 'cli'):
         result = try_fault(fault, program, default_model_path(), tmp_path, cloud)
-        assert handled(fault, result, str(tmp_path / fault.name)), (program, result.returncode, result.stderr)
+        assert handled(fault, result, str(tmp_path / fault.name)), (
+            program,
+            result.returncode,
+            result.stderr,
+        )
 
 
 def _header(sec):
-    return Header(stamp=Time(sec=sec, nanosec=0), frame_id="camera_optical_frame")
+    return Header(stamp=Time(sec=sec, nanosec=0), frame_id='camera_optical_frame')
 
 
 def test_publishers_that_come_and_go_and_reliable_ones_are_all_answered(model):
@@ -74,22 +95,30 @@ def test_publishers_that_come_and_go_and_reliable_ones_are_all_answered(model):
     g = good_cloud(model)
     with ros_context() as ctx:
         node = PcrpNode(model=model, context=ctx)
-        listener = rclpy.create_node("listener", context=ctx)
+        listener = rclpy.create_node('listener', context=ctx)
         poses = []
-        listener.create_subscription(PoseStamped, "/segmented_object/pose", poses.append, 10)
-        with spinning(ctx, node, listener) as ex:
-            for k, reliability in enumerate([ReliabilityPolicy.BEST_EFFORT, ReliabilityPolicy.RELIABLE,
-                                             ReliabilityPolicy.BEST_EFFORT]):
+        listener.create_subscription(PoseStamped, '/segmented_object/pose', poses.append, 10)
+        with spinning(ctx, node, listener):
+            for k, reliability in enumerate(
+                [
+                    ReliabilityPolicy.BEST_EFFORT,
+                    ReliabilityPolicy.RELIABLE,
+                    ReliabilityPolicy.BEST_EFFORT,
+                ]
+            ):
                 # a fresh publisher node each time, gone before the next one comes
-                pub_node = rclpy.create_node(f"camera_{k}", context=ctx)
-                pub = pub_node.create_publisher(PointCloud2, "/segmented_object",
+                pub_node = rclpy.create_node(f'camera_{k}', context=ctx)
+                pub = pub_node.create_publisher(PointCloud2, '/segmented_object',
                                                 QoSProfile(depth=2, reliability=reliability))
                 assert wait_for(lambda: pub.get_subscription_count(), 10)
-                assert publish_until(pub, xyz_to_pointcloud2(g.points, _header(k + 1)),
-                                     lambda: any(p.header.stamp.sec == k + 1 for p in poses)), f"publisher {k} not answered"
+                assert publish_until(
+                    pub,
+                    xyz_to_pointcloud2(g.points, _header(k + 1)),
+                    lambda: any(p.header.stamp.sec == k + 1 for p in poses),
+                ), f'publisher {k} not answered'
                 pub_node.destroy_node()
         assert {p.header.stamp.sec for p in poses} == {1, 2, 3}
-        assert node.stats["segmented_object"].counts["rejected"] == 0
+        assert node.stats['segmented_object'].counts['rejected'] == 0
 
 
 def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
@@ -97,66 +126,95 @@ def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
     g = good_cloud(model)
     # a topic of its own: the bad-cloud runner above keeps a node on /segmented_object for the
     # whole module, and a copy of the cloud it happens to receive would be a third answer
-    topic = "second_instance_object"
-    only = [Parameter("input_topics", value=[topic])]
+    topic = 'second_instance_object'
+    only = [Parameter('input_topics', value=[topic])]
     with ros_context() as ctx:
         first = PcrpNode(model=model, context=ctx, parameter_overrides=only)
-        second = PcrpNode(model=PCRP.load(default_model_path()), node_name="pcrp_node_2", context=ctx,
-                          parameter_overrides=only)
-        client = rclpy.create_node("client", context=ctx)
+        second = PcrpNode(
+            model=PCRP.load(default_model_path()),
+            node_name='pcrp_node_2',
+            context=ctx,
+            parameter_overrides=only,
+        )
+        client = rclpy.create_node('client', context=ctx)
         poses, names = [], set()
-        client.create_subscription(PoseStamped, f"/{topic}/pose", poses.append, 10)
-        client.create_subscription(DiagnosticArray, "/diagnostics",
+        client.create_subscription(PoseStamped, f'/{topic}/pose', poses.append, 10)
+        client.create_subscription(DiagnosticArray, '/diagnostics',
                                    lambda a: names.update(s.name for s in a.status), 10)
-        pub = client.create_publisher(PointCloud2, f"/{topic}", QoSProfile(depth=2))
+        pub = client.create_publisher(PointCloud2, f'/{topic}', QoSProfile(depth=2))
         with spinning(ctx, first, second, client):
             assert wait_for(lambda: pub.get_subscription_count() >= 2, 30), \
-                [i.node_name for i in client.get_subscriptions_info_by_topic(f"/{topic}")]
-            answered = lambda n: n.stats[topic].counts["answered"]  # noqa: E731
+                [i.node_name for i in client.get_subscriptions_info_by_topic(f'/{topic}')]
+            answered = lambda n: n.stats[topic].counts['answered']  # noqa: E731
             assert publish_until(pub, xyz_to_pointcloud2(g.points, _header(7)),
                                  lambda: answered(first) and answered(second) and len(poses) >= 2)
-            assert wait_for(lambda: {f"pcrp_node: {topic}", f"pcrp_node_2: {topic}"} <= names, 5)
-            # each node works in a thread of its own: a cloud received while it was busy may still
-            # be waiting in its slot, so wait until every received cloud is decided and its pose is in
+            assert wait_for(
+                lambda: {f'/pcrp_node: /{topic}', f'/pcrp_node_2: /{topic}'} <= names, 5
+            )
+            # each node works in a thread of its own: a cloud received while it was busy may
+            # still be waiting in its slot, so wait until every received cloud is decided and its
+            # pose is in
             decided = lambda n: sum(n.stats[topic].counts[k]  # noqa: E731
-                                    for k in ("answered", "rejected", "dropped_stale"))
-            assert wait_for(lambda: all(decided(n) == n.stats[topic].counts["received"]
+                                    for k in ('answered', 'rejected', 'dropped_stale'))
+            assert wait_for(lambda: all(decided(n) == n.stats[topic].counts['received']
                                         for n in (first, second))
                             and len(poses) == answered(first) + answered(second), 60), \
                 ([dict(n.stats[topic].counts) for n in (first, second)], len(poses))
-        # one answer per instance per cloud received, all with the cloud's header and the same pose
+        # one answer per instance per cloud received, all with the cloud's header and the same
+        # pose
         assert len(poses) == answered(first) + answered(second)
         assert all(p.header == poses[0].header for p in poses)
-        q = np.array([[p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z, p.pose.orientation.w]
-                      for p in poses])
+        q = np.array(
+            [
+                [
+                    p.pose.orientation.x,
+                    p.pose.orientation.y,
+                    p.pose.orientation.z,
+                    p.pose.orientation.w,
+                ]
+                for p in poses
+            ]
+        )
         np.testing.assert_allclose(np.abs(q @ q[0]), 1.0, atol=1e-6)
 
 
 def test_a_short_soak_accounts_for_every_cloud(capsys):
     from tools.soak import run
     result = run(duration=15.0, rate=5.0, n_topics=2, bad_share=0.3)
-    failed = [name for name, ok in result["checks"].items() if not ok]
-    assert not failed, (failed, result["per_topic"])
-    for d in result["per_topic"].values():
-        assert d["sent_bad"] > 0 and d["answered"] > 0 and d["received"] == d["sent_good"] + d["sent_bad"]
+    failed = [name for name, ok in result['checks'].items() if not ok]
+    assert not failed, (failed, result['per_topic'])
+    for d in result['per_topic'].values():
+        assert (
+            d['sent_bad'] > 0
+            and d['answered'] > 0
+            and d['received'] == d['sent_good'] + d['sent_bad']
+        )
 
 
 def test_rejections_are_logged_once_per_reason_per_throttle_period(model):
     with ros_context() as ctx:
-        node = PcrpNode(model=model, context=ctx, parameter_overrides=[Parameter("log_throttle_sec", value=60.0)])
+        node = PcrpNode(
+            model=model,
+            context=ctx,
+            parameter_overrides=[Parameter('log_throttle_sec', value=60.0)],
+        )
         said = []
 
         class Logger:
-            def warn(self, text):
+            def warning(self, text):
                 said.append(text)
         node.get_logger = Logger
         try:
-            for reason in ("missing_field", "missing_field", "empty", "missing_field", "empty"):
-                node._reject("segmented_object", reason, "details")
-            assert node.stats["segmented_object"].rejections == {"missing_field": 3, "empty": 2}
-            assert len(said) == 2 and "missing_field, 1 so far" in said[0] and "(empty, 1 so far)" in said[1]
-            node.set_parameters([Parameter("log_throttle_sec", value=0.0)])
-            node._reject("segmented_object", "empty", "details")
-            assert len(said) == 3 and "(empty, 3 so far)" in said[2]
+            for reason in ('missing_field', 'missing_field', 'empty', 'missing_field', 'empty'):
+                node.answerer.reject('segmented_object', reason, 'details')
+            assert node.stats['segmented_object'].rejections == {'missing_field': 3, 'empty': 2}
+            assert (
+                len(said) == 2
+                and 'missing_field, 1 so far' in said[0]
+                and '(empty, 1 so far)' in said[1]
+            )
+            node.set_parameters([Parameter('log_throttle_sec', value=0.0)])
+            node.answerer.reject('segmented_object', 'empty', 'details')
+            assert len(said) == 3 and '(empty, 3 so far)' in said[2]
         finally:
             node.destroy_node()

@@ -23,16 +23,6 @@ from tools.bad_clouds import CASES, GoodCloud, good_cloud
 NODE_NAME = "pcrp_soak_node"
 
 
-def _rss_mb(pid: int) -> float:
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return float("nan")
-
-
 def refused_on_arrival():
     """Bad cases with exactly one allowed outcome, a rejection the node makes before queueing
     (so it is counted whatever the load): reason -> case."""
@@ -49,7 +39,8 @@ class _NodeProcesses:
     """k node processes, each answering its share of the topics (round robin), as a user scales
     out: one model file, several processes, topics split between them by parameter."""
 
-    def __init__(self, topics, k: int, model_path):
+    def __init__(self, topics, k: int, model_path, workers: int = 1):
+        self.workers = workers
         self.dir = Path(tempfile.mkdtemp(prefix="pcrp_soak_"))
         self.names = [NODE_NAME if k == 1 else f"{NODE_NAME}_{i}" for i in range(k)]
         self.share = {name: topics[i::k] for i, name in enumerate(self.names)}
@@ -57,7 +48,8 @@ class _NodeProcesses:
 
     def _start(self, name, model_path):
         params = self.dir / f"{name}.yaml"
-        lines = [f"{name}:", "  ros__parameters:", f"    input_topics: [{', '.join(self.share[name])}]"]
+        lines = [f"{name}:", "  ros__parameters:", f"    input_topics: [{', '.join(self.share[name])}]",
+                 f"    workers: {self.workers}"]
         if model_path:
             lines.append(f"    model_path: '{model_path}'")
         params.write_text("\n".join(lines) + "\n")
@@ -65,13 +57,16 @@ class _NodeProcesses:
         return subprocess.Popen(cmd, stdout=(self.dir / f"{name}.log").open("w"), stderr=subprocess.STDOUT)
 
     def diagnostic_names(self) -> dict:
-        return {f"{name}: {t}": t for name in self.names for t in self.share[name]}
+        # statuses are named by the node's full name and the resolved topic
+        return {f"/{name}: /{t}": t for name in self.names for t in self.share[name]}
 
     def alive(self) -> bool:
         return all(p.poll() is None for p in self.procs)
 
     def rss_mb(self) -> float:
-        return sum(_rss_mb(p.pid) for p in self.procs)
+        """The node processes' resident memory, their worker processes' included."""
+        from tools.bench import tree_rss_mb
+        return sum(tree_rss_mb(p.pid) for p in self.procs)
 
     def stop(self) -> list[int]:
         """Ctrl-C each, as a user would; exit codes (killed ones count as -9)."""
@@ -110,7 +105,8 @@ class _Diagnostics:
 
 
 def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
-        model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print) -> dict:
+        model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print,
+        workers: int = 1) -> dict:
     import rclpy
     from geometry_msgs.msg import PoseStamped
     from rclpy.executors import SingleThreadedExecutor
@@ -127,7 +123,7 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
              for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))]
     bads = refused_on_arrival()
     topics = [f"pcrp_soak/object_{k}" for k in range(n_topics)]
-    nodes = _NodeProcesses(topics, processes, model_path)
+    nodes = _NodeProcesses(topics, processes, model_path, workers)
 
     rclpy.init()
     client = rclpy.create_node("pcrp_soak_driver")
@@ -151,7 +147,7 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
         # the driver sees the match before the node's reader has seen the writer: give discovery
         # a moment, or the first clouds are lost on the way
         time.sleep(2.0)
-        progress(f"soak: {processes} node process(es) up; {n_topics} topics at {rate:g} Hz for {duration:g} s, "
+        progress(f"soak: {processes} node process(es) up ({workers} worker(s) each); {n_topics} topics at {rate:g} Hz for {duration:g} s, "
                  f"{bad_share:.0%} bad clouds")
         bad_cycle = list(bads.items())
         t0 = next_rss = time.monotonic()
@@ -202,6 +198,7 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     result = _summarise(topics, sent, diag, poses, rss, alive, code, nodes.log(), duration, rate, bad_share,
                         str(nodes.dir))
     result["processes"] = processes
+    result["workers"] = workers
     return result
 
 
@@ -254,6 +251,7 @@ def register(sub) -> None:
     p.add_argument("--topics", type=int, default=4)
     p.add_argument("--bad-share", type=float, default=0.2)
     p.add_argument("--processes", type=int, default=1, help="node processes sharing the topics")
+    p.add_argument("--workers", type=int, default=1, help="the node's workers parameter")
     p.add_argument("--model", default=None)
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")
     p.set_defaults(func=_soak)
@@ -261,7 +259,8 @@ def register(sub) -> None:
 
 def _soak(args) -> int:
     import json
-    result = run(args.duration, args.rate, args.topics, args.bad_share, args.model, processes=args.processes)
+    result = run(args.duration, args.rate, args.topics, args.bad_share, args.model, processes=args.processes,
+                 workers=args.workers)
     print(table(result))
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=1))

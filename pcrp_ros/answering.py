@@ -1,0 +1,611 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Answering object clouds: everything the plain and the managed node share.
+
+A CloudAnswerer lives inside a node (rclpy.node.Node or rclpy.lifecycle.LifecycleNode) and
+does the work in four steps that map onto the lifecycle transitions:
+
+- configure: read the parameters, load and check the model, start the workers;
+- activate: subscribe to every input topic, create the publishers and /diagnostics, and
+  start answering;
+- deactivate: stop answering and remove the subscriptions and publishers;
+- cleanup: stop the workers and free the model.
+
+The plain node runs configure and activate in its constructor. Clouds are checked on arrival
+(cheap), so every unusable one is refused and counted under its reason however busy the
+workers are; usable ones wait in one slot per topic, a newer cloud replacing the one waiting
+(counted as dropped_stale), and `workers` threads answer the oldest-waiting topic first.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseStamped
+import numpy as np
+from pcrp_core import InvalidCloud, ModelError, PCRP
+from pcrp_core.config import PoseOptions, QueryOptions
+from pcrp_ros.conversions import aligned_points, CloudFormatError, detections_msg
+from pcrp_ros.conversions import pointcloud2_to_xyz, pose_stamped, xyz_to_pointcloud2
+from pcrp_ros.parameters import descriptor, MODEL_SETTINGS, NodeSettings, parameters, ros_value
+from pcrp_ros.stats import StreamStats
+from pcrp_ros.workers import LocalEstimator, ProcessEstimator, WorkerDied, WorkerStartError
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.parameter import Parameter
+from rclpy.qos import HistoryPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import String
+from std_srvs.srv import Trigger
+
+# what a failed model load raises: the model's own checks, settings it cannot take, workers
+LOAD_ERRORS = (ModelError, ValueError, WorkerStartError, OSError)
+# seconds between two attempts to restart a worker process that could not be restarted
+RESTART_BACKOFF = 10.0
+# seconds the reload service waits for the new model before answering
+RELOAD_WAIT = 600.0
+
+
+class Engine:
+    """One loaded model and what answers with it: the model itself, or worker processes."""
+
+    def __init__(self, model, path: str, estimators: list):
+        self.model = model
+        self.path = path
+        self.estimators = estimators
+        self.restarts = 0
+        self.down = {}            # worker index -> why it is down
+        self.retry_at = {}        # worker index -> when to try starting it again
+        self._closed = set()
+        self._lock = threading.Lock()
+
+    def describe(self) -> str:
+        where = self.path or 'the shipped default model'
+        return (f'{where} ({len(self.model.gallery_ids)} gallery objects: '
+                f"{', '.join(self.model.categories)})")
+
+    def release(self, k: int) -> None:
+        """Stop worker k (idempotent); the other workers are left alone."""
+        with self._lock:
+            if k in self._closed:
+                return
+            self._closed.add(k)
+            estimator = self.estimators[k]
+        if estimator is not None:
+            estimator.close()
+
+    def close(self) -> None:
+        for k in range(len(self.estimators)):
+            self.release(k)
+
+    def pids(self) -> list:
+        return [getattr(e, 'pid', None) for e in self.estimators]
+
+
+def load_engine(path: str, params: dict, up, workers: int, model=None) -> Engine:
+    """
+    Load and check the model at path (or take the given one) and start the workers.
+
+    The settings are applied; LOAD_ERRORS say why not, with nothing left running.
+    """
+    model = model if model is not None else PCRP.load(path or None)
+    model.set_params(**params)
+    if up is not None:
+        model.check_up(up)
+    if workers == 1:
+        return Engine(model, path, [LocalEstimator(model)])
+    started = []
+    try:
+        # started together, so they load side by side
+        for _ in range(workers):
+            started.append(ProcessEstimator(path, params, wait=False))
+        for estimator in started:
+            estimator.wait_ready()
+    except BaseException:
+        for estimator in started:
+            estimator.close()
+        raise
+    return Engine(model, path, started)
+
+
+class ReloadRequest:
+    """A request to switch models; done is set once it succeeded or failed (ok, message)."""
+
+    def __init__(self, path: str, from_parameter: bool):
+        self.path = path
+        self.from_parameter = from_parameter
+        self.done = threading.Event()
+        self.ok = False
+        self.message = ''
+
+    def finish(self, ok: bool, message: str) -> None:
+        self.ok, self.message = ok, message
+        self.done.set()
+
+
+class CloudAnswerer:
+    """The streams, the workers and the model of one node; see the module docstring."""
+
+    def __init__(self, node):
+        self.node = node
+        for spec in parameters():
+            node.declare_parameter(spec['name'], ros_value(spec['default']), descriptor(spec))
+        values = {spec['name']: self._param(spec['name']) for spec in parameters()}
+        # ValueError saying which is wrong, before anything is loaded
+        self.settings = NodeSettings(**{k: values[k] for k in NodeSettings.__dataclass_fields__})
+        self._params = {k: values[k] for k in MODEL_SETTINGS}
+        _check_model_settings(self._params)
+        self._up = _checked_up(values['up_vector'], None)
+        self.engine = None
+        self.stats: dict[str, StreamStats] = {}
+        self._resolved = {}
+        self._pubs = {}
+        self._subs = []
+        self._diag = None
+        self._timer = None
+        self._service = None
+        self._cv = threading.Condition()
+        self._slots = {}
+        self._threads = []
+        self._running = False
+        self._retired = []
+        self._last_log = {}
+        self._model_problem = ''
+        self._reload_lock = threading.Lock()
+        self._pending = None
+        self._reloader = None
+        node.add_on_set_parameters_callback(self._on_set_parameters)
+        node.add_post_set_parameters_callback(self._on_parameters_set)
+
+    def _param(self, name: str):
+        return self.node.get_parameter(name).value
+
+    def _log(self):
+        return self.node.get_logger()
+
+    # -- lifecycle ----------------------------------------------------------------------------
+    def configure(self, model=None) -> None:
+        """Load and check the model and start the workers; LOAD_ERRORS saying why not."""
+        path = self._param('model_path')
+        self.engine = load_engine(path, dict(self._params), self._up, self.settings.workers, model)
+        self._model_problem = ''
+        self._service = self.node.create_service(
+            Trigger, '~/reload_model', self._on_reload_service,
+            callback_group=MutuallyExclusiveCallbackGroup())
+        self._log().info(f'model: {self.engine.describe()}, {self._workers_text()}')
+
+    def activate(self) -> None:
+        """Subscribe, create the publishers and /diagnostics, start answering."""
+        s = self.settings
+        reliability = (ReliabilityPolicy.BEST_EFFORT if s.qos_reliability == 'best_effort'
+                       else ReliabilityPolicy.RELIABLE)
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=s.qos_depth,
+                         reliability=reliability, durability=qos_profile_sensor_data.durability)
+        out_qos = QoSProfile(depth=10)   # reliable: a planner must not miss a pose
+        for topic in s.input_topics:
+            sub = self.node.create_subscription(
+                PointCloud2, topic, lambda msg, t=topic: self._on_cloud(t, msg), qos)
+            self._subs.append(sub)
+            resolved = self._resolved[topic] = sub.topic_name
+            pubs = {'pose': self.node.create_publisher(PoseStamped, f'{resolved}/pose', out_qos),
+                    'gallery_id': self.node.create_publisher(
+                        String, f'{resolved}/gallery_id', out_qos),
+                    'aligned_model': self.node.create_publisher(
+                        PointCloud2, f'{resolved}/aligned_model', out_qos)}
+            try:
+                from vision_msgs.msg import Detection3DArray
+                pubs['detections'] = self.node.create_publisher(
+                    Detection3DArray, f'{resolved}/detections', out_qos)
+            except ImportError:
+                pass
+            self._pubs[topic] = pubs
+            self.stats.setdefault(topic, StreamStats())
+        self._diag = self.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._timer = self.node.create_timer(1.0, self.publish_diagnostics)
+        with self._cv:
+            self._running = True
+        self._threads = [threading.Thread(target=self._work, args=(k,), daemon=True,
+                                          name=f'pcrp_answer_{k}')
+                         for k in range(self.settings.workers)]
+        for t in self._threads:
+            t.start()
+        self._log().info(f'{len(self.engine.model.gallery_ids)} gallery objects '
+                         f"({', '.join(self.engine.model.categories)}), listening on "
+                         f"{', '.join(sub.topic_name for sub in self._subs)}")
+
+    def deactivate(self) -> None:
+        """
+        Stop answering and remove the subscriptions and publishers.
+
+        A cloud being answered is finished, not published.
+        """
+        with self._cv:
+            self._running = False
+            for topic in self._slots:   # received, never to be answered: accounted for
+                self.stats[topic].count('dropped_stale')
+            self._slots.clear()
+            self._cv.notify_all()
+        for t in self._threads:
+            t.join(timeout=60.0)
+        self._threads = []
+        pubs, self._pubs = self._pubs, {}
+        for sub in self._subs:
+            self.node.destroy_subscription(sub)
+        self._subs = []
+        for group in pubs.values():
+            for pub in group.values():
+                self.node.destroy_publisher(pub)
+        if self._timer is not None:
+            self.node.destroy_timer(self._timer)
+            self._timer = None
+        if self._diag is not None:
+            self.node.destroy_publisher(self._diag)
+            self._diag = None
+        self._close_retired()
+
+    def cleanup(self) -> None:
+        """Stop the workers and free the model (after any switch under way has ended)."""
+        with self._reload_lock:
+            reloader = self._reloader
+        if reloader is not None:
+            reloader.join(timeout=RELOAD_WAIT)
+        with self._cv:
+            engine, self.engine = self.engine, None
+        if engine is not None:
+            engine.close()
+        self._close_retired()
+        if self._service is not None:
+            self.node.destroy_service(self._service)
+            self._service = None
+
+    @property
+    def active(self) -> bool:
+        return self._running
+
+    def _close_retired(self) -> None:
+        with self._cv:
+            retired, self._retired = self._retired, []
+        for engine in retired:
+            engine.close()
+
+    # -- parameters ---------------------------------------------------------------------------
+    def _on_set_parameters(self, params) -> SetParametersResult:
+        changes = {p.name: p.value for p in params if p.name in MODEL_SETTINGS}
+        up = [p.value for p in params if p.name == 'up_vector']
+        with self._cv:
+            engine = self.engine
+            try:
+                new_up = _checked_up(up[0], engine and engine.model) if up else self._up
+                if engine is not None:
+                    engine.model.set_params(**changes)   # checks every value before setting any
+                else:
+                    _check_model_settings({**self._params, **changes})
+            except ValueError as e:
+                return SetParametersResult(successful=False, reason=str(e))
+            self._up = new_up
+            self._params.update(changes)
+        return SetParametersResult(successful=True)
+
+    def _on_parameters_set(self, params) -> None:
+        """Switch models when model_path was set to another path while a model is loaded."""
+        for p in params:
+            if p.name == 'model_path' and self.engine is not None and p.value != self.engine.path:
+                self.reload(p.value, from_parameter=True)
+
+    # -- switching models ---------------------------------------------------------------------
+    def reload(self, path: str, from_parameter: bool = False) -> ReloadRequest:
+        """
+        Load the model at path beside the current one, off the callback thread.
+
+        They are swapped once it is ready; a newer request replaces one still waiting.
+        """
+        request = ReloadRequest(path, from_parameter)
+        with self._reload_lock:
+            if self._pending is not None:
+                self._pending.finish(False, f'superseded by a request for {path!r}')
+            self._pending = request
+            if self._reloader is None:
+                self._reloader = threading.Thread(target=self._reload_loop, daemon=True,
+                                                  name='pcrp_reload')
+                self._reloader.start()
+        return request
+
+    def _reload_loop(self) -> None:
+        while True:
+            with self._reload_lock:
+                request, self._pending = self._pending, None
+                if request is None:
+                    self._reloader = None
+                    return
+            try:
+                self._switch(request)
+            except Exception as e:  # the old model answers on whatever happened here
+                request.finish(False, f'{type(e).__name__}: {e}')
+
+    def _switch(self, request: ReloadRequest) -> None:
+        old = self.engine
+        if old is None:
+            request.finish(False, 'no model is loaded (the node is not configured)')
+            return
+        where = request.path or 'the shipped default model'
+        self._log().info(f'loading {where}; {old.describe()} answers meanwhile')
+        try:
+            engine = load_engine(request.path, dict(self._params), self._up,
+                                 self.settings.workers)
+        except LOAD_ERRORS as e:
+            why = str(e) or type(e).__name__
+            self._model_problem = f'could not switch to {where}: {why}'
+            self._log().error(f'{self._model_problem}; still answering with {old.describe()}')
+            request.finish(False, why)
+            with self._reload_lock:
+                newer = self._pending is not None
+            if request.from_parameter and not newer:
+                # the parameter says which model answers: back to the one still in use
+                self.node.set_parameters([Parameter('model_path', value=old.path)])
+            return
+        with self._cv:
+            if self.engine is not old:   # cleaned up or switched meanwhile
+                swapped = False
+            else:
+                engine.model.set_params(**self._params)   # any change made while loading
+                self.engine = engine
+                self._retired.append(old)
+                swapped = True
+                self._cv.notify_all()
+            running = self._running
+        if not swapped:
+            engine.close()
+            request.finish(False, 'the node was cleaned up while the model loaded')
+            return
+        if not running:
+            self._close_retired()
+        self._model_problem = ''
+        self._log().info(f'now answering with {engine.describe()}')
+        request.finish(True, f'now answering with {engine.describe()}')
+
+    def _on_reload_service(self, request, response):
+        """~/reload_model: load model_path again (a model rebuilt in place) and swap."""
+        reload = self.reload(self._param('model_path'))
+        if reload.done.wait(RELOAD_WAIT):
+            response.success, response.message = reload.ok, reload.message
+        else:
+            response.success = False
+            response.message = (f'still loading after {RELOAD_WAIT:g} s; the outcome will be '
+                                'logged and shown in /diagnostics')
+        return response
+
+    # -- receiving ----------------------------------------------------------------------------
+    def _on_cloud(self, topic: str, msg: PointCloud2) -> None:
+        """
+        Refuse an unreadable cloud at once (cheap), or queue it.
+
+        The newest cloud of a topic replaces any still waiting.
+        """
+        received = time.monotonic()
+        stats = self.stats[topic]
+        stats.count('received')
+        engine = self.engine
+        if engine is None or not self._running:
+            stats.count('dropped_stale')
+            return
+        try:
+            points = engine.model.prepare(pointcloud2_to_xyz(msg, finite_only=False))
+        except (CloudFormatError, InvalidCloud) as e:
+            self.reject(topic, e.reason, str(e))
+            return
+        except Exception as e:   # nothing one message holds may take the subscription down
+            self.reject(topic, 'internal_error', f'{type(e).__name__}: {e}')
+            return
+        with self._cv:
+            if topic in self._slots:
+                stats.count('dropped_stale')
+            self._slots[topic] = (msg.header, points, received)
+            self._cv.notify()
+
+    def _next(self, k: int, engine):
+        """
+        Decide, under the lock, what worker k does next.
+
+        One of ('stop',), ('switch', engine), ('restart',) or ('answer', topic, item).
+        """
+        while True:
+            if not self._running:
+                return ('stop',)
+            if self.engine is not engine:
+                return ('switch', self.engine)
+            if k in engine.down:
+                wait = engine.retry_at[k] - time.monotonic()
+                if wait <= 0:
+                    return ('restart',)
+                self._cv.wait(min(wait, 1.0))
+                continue
+            if self._slots:
+                topic = next(iter(self._slots))   # oldest-waiting topic first: fair
+                return ('answer', topic, self._slots.pop(topic))
+            self._cv.wait()
+
+    def _work(self, k: int) -> None:
+        engine = None
+        while True:
+            with self._cv:
+                step = self._next(k, engine)
+            if step[0] == 'stop':
+                break
+            if step[0] == 'switch':
+                if engine is not None:
+                    engine.release(k)
+                engine = step[1]
+                continue
+            if step[0] == 'restart':
+                self._restart(engine, k)
+                continue
+            topic, item = step[1], step[2]
+            try:
+                self.answer(topic, item, engine, k)
+            except WorkerDied as e:
+                self.reject(topic, 'worker_died', f'{e}; restarting it')
+                engine.down[k] = str(e)
+                engine.retry_at[k] = time.monotonic()
+            except Exception as e:   # the stream must survive anything one cloud does
+                self.reject(topic, 'internal_error', f'{type(e).__name__}: {e}')
+        if engine is not None and engine is not self.engine:
+            engine.release(k)
+
+    def _restart(self, engine: Engine, k: int) -> None:
+        """Start worker k of the engine again after it died."""
+        old = engine.estimators[k]
+        if old is not None:
+            old.close(timeout=1.0)
+        try:
+            engine.estimators[k] = ProcessEstimator(engine.path, dict(self._params))
+        except LOAD_ERRORS as e:
+            engine.estimators[k] = None
+            engine.down[k] = f'could not be restarted: {e}'
+            engine.retry_at[k] = time.monotonic() + RESTART_BACKOFF
+            self._log().error(f'worker {k} {engine.down[k]}; trying again in '
+                              f'{RESTART_BACKOFF:g} s')
+            return
+        engine.restarts += 1
+        engine.down.pop(k, None)
+        engine.retry_at.pop(k, None)
+        self._log().info(f'worker {k} restarted (pid {engine.estimators[k].pid})')
+
+    def reject(self, topic: str, reason: str, message: str) -> None:
+        """
+        Count a rejected cloud, and log once per topic and reason per log_throttle_sec.
+
+        rclpy's own throttle is per call site, so one noisy reason would hide every other.
+        """
+        self.stats[topic].count('rejected', reason)
+        now = time.monotonic()
+        key = (topic, reason)
+        if now - self._last_log.get(key, -np.inf) >= float(self._param('log_throttle_sec')):
+            self._last_log[key] = now
+            total = self.stats[topic].rejections[reason]
+            self._log().warning(f'{topic}: cloud rejected ({reason}, {total} so far): {message}')
+
+    def answer(self, topic: str, item: tuple, engine: Engine, k: int = 0) -> None:
+        """Estimate one queued cloud with worker k of the engine and publish the answer."""
+        header, points, received = item
+        viewpoint = np.zeros(3) if self._param('sensor_at_origin') else None
+        try:
+            result = engine.estimators[k].estimate(points, viewpoint, self._up,
+                                                   dict(self._params))
+        except InvalidCloud as e:
+            self.reject(topic, e.reason, str(e))
+            return
+        stats = self.stats[topic]
+        stats.estimated(result.timings, None if result.rejected else result.confidence)
+        if result.rejected:
+            self.reject(topic, 'low_confidence', result.reason)
+            return
+        pubs = self._pubs.get(topic)
+        if pubs is None or not self._running:   # deactivated meanwhile: answer no more
+            return
+        pubs['pose'].publish(pose_stamped(result, header))
+        pubs['gallery_id'].publish(String(data=result.gallery_id))
+        if self._param('publish_aligned_model'):
+            cloud = aligned_points(result, engine.model.gallery_cloud(result.gallery_id))
+            pubs['aligned_model'].publish(xyz_to_pointcloud2(cloud, header))
+        if 'detections' in pubs:
+            det = detections_msg(result, header)
+            if det is not None:
+                pubs['detections'].publish(det)
+        stamp = header.stamp.sec + 1e-9 * header.stamp.nanosec
+        now = self.node.get_clock().now().nanoseconds * 1e-9
+        stats.timing(time.monotonic() - received, now - stamp)
+        stats.count('answered')
+
+    # -- diagnostics --------------------------------------------------------------------------
+    def _workers_text(self) -> str:
+        n = self.settings.workers
+        return 'answering in the node process' if n == 1 else f'{n} worker processes'
+
+    def diagnostics(self) -> DiagnosticArray:
+        """
+        Make the node's statuses: its model, then one per input topic.
+
+        Names carry the node's fully qualified name and the resolved topic, so instances in
+        other namespaces differ.
+        """
+        fqn = self.node.get_fully_qualified_name()
+        arr = DiagnosticArray()
+        arr.header.stamp = self.node.get_clock().now().to_msg()
+        engine = self.engine
+        if engine is not None:
+            problems = [self._model_problem] if self._model_problem else []
+            problems += [f'worker {k} {why}' for k, why in sorted(engine.down.items())]
+            values = {'model_path': engine.path, 'gallery_objects': len(engine.model.gallery_ids),
+                      'categories': ', '.join(engine.model.categories),
+                      'workers': self.settings.workers,
+                      'worker_pids': ', '.join(str(p) for p in engine.pids() if p),
+                      'worker_restarts': engine.restarts}
+            arr.status.append(DiagnosticStatus(
+                level=DiagnosticStatus.WARN if problems else DiagnosticStatus.OK,
+                name=f'{fqn}: model', hardware_id='pcrp',
+                message='; '.join(problems) or f'answering with {engine.describe()}',
+                values=[KeyValue(key=k, value=str(v)) for k, v in values.items()]))
+        for topic, stats in self.stats.items():
+            ok, text = stats.status()
+            arr.status.append(DiagnosticStatus(
+                level=DiagnosticStatus.OK if ok else DiagnosticStatus.WARN,
+                name=f'{fqn}: {self._resolved.get(topic, topic)}', hardware_id='pcrp',
+                message=text, values=[KeyValue(key=k, value=_text(k, v))
+                                      for k, v in sorted(stats.snapshot().items())]))
+        return arr
+
+    def publish_diagnostics(self) -> None:
+        if self._diag is not None:
+            self._diag.publish(self.diagnostics())
+
+    def worker_pids(self) -> list:
+        engine = self.engine
+        return [] if engine is None else engine.pids()
+
+
+def _text(key: str, value) -> str:
+    if isinstance(value, float):
+        return f'{value:.3f}' if key.startswith('confidence') else f'{value:.1f}'
+    return str(value)
+
+
+def _checked_up(value, model):
+    """
+    Check up_vector and return it as estimate() takes it (None for [0, 0, 0]).
+
+    ValueError says why it cannot be used. Without a model only its shape is checked (the
+    model is checked on loading).
+    """
+    v = np.asarray(list(value), dtype=np.float64)
+    if v.shape == (3,) and not v.any():
+        return None
+    if model is None:
+        if v.shape != (3,) or not np.isfinite(v).all():
+            raise ValueError(f'up_vector {list(value)!r}: expected a finite 3-vector')
+        return v / np.linalg.norm(v)
+    try:
+        return model.check_up(v)
+    except ValueError as e:
+        raise ValueError(f'up_vector {list(value)!r}: {e}') from None
+
+
+def _check_model_settings(values: dict) -> None:
+    """Raise ValueError unless the model settings are valid together (no model needed)."""
+    query = set(QueryOptions.__dataclass_fields__)
+    QueryOptions(**{k: v for k, v in values.items() if k in query})
+    PoseOptions(**{k: v for k, v in values.items() if k not in query})
