@@ -15,7 +15,7 @@ import time
 # Options whose values may start with a minus (an axis "-y", a vector "-1,0,0"). argparse takes
 # such a value for an option of its own unless it is written "--up=-1,0,0"; joined before parsing,
 # "--up -1,0,0" works as a user would type it.
-SIGNED_OPTIONS = ("--up", "--up-axis")
+SIGNED_OPTIONS = ("--up", "--up-axis", "--viewpoint")
 _SIGNED_VALUE = re.compile(r"-(?:[xyz]|[\d.][\d.,eE+-]*)")
 
 
@@ -93,6 +93,9 @@ def register_query(sub) -> None:
                         "within --up-tolerance")
     p.add_argument("--up-tolerance", type=float, default=None, metavar="DEG",
                    help="how far an answer may tip the object from --up (default 60)")
+    p.add_argument("--viewpoint", default=None, metavar="X,Y,Z",
+                   help="where the sensor was in the cloud's frame, when the cloud is one sensor's view "
+                        "(0,0,0 for a cloud in the camera's own frame, as a depth driver publishes it)")
     p.set_defaults(func=_query)
 
 
@@ -112,8 +115,9 @@ def _query(args) -> int:
                               ("up_tolerance_deg", args.up_tolerance)) if v is not None}
     try:
         up = parse_up(args.up)
+        viewpoint = parse_up(args.viewpoint, "--viewpoint")
         model.set_params(**opts)
-        result = model.estimate(points, up=up)
+        result = model.estimate(points, viewpoint=viewpoint, up=up)
     except (InvalidCloud, ValueError) as e:
         return _fail(f"{args.cloud}: {e}")
     if args.json:
@@ -198,8 +202,8 @@ def _eval(args) -> int:
     return 0
 
 
-def parse_up(text):
-    """--up's X,Y,Z as three floats (None when not given); ValueError saying what is expected."""
+def parse_up(text, option: str = "--up"):
+    """An option's X,Y,Z as three floats (None when not given); ValueError saying what is expected."""
     if text is None:
         return None
     try:
@@ -207,7 +211,7 @@ def parse_up(text):
     except ValueError:
         up = []
     if len(up) != 3:
-        raise ValueError(f"--up {text!r}: expected three numbers, e.g. 0,0,1")
+        raise ValueError(f"{option} {text!r}: expected three numbers, e.g. 0,0,1")
     return up
 
 

@@ -19,7 +19,6 @@ from pathlib import Path
 import threading
 import time
 
-import numpy as np
 
 DEMO_BAG = Path(__file__).resolve().parent / 'data' / 'demo_bag'
 
@@ -33,7 +32,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     from std_msgs.msg import String
 
     from pcrp_core import PCRP
-    from pcrp_ros.bag_commands import HEADER, format_row, replay, summary
+    from pcrp_ros.bag_commands import answer_quality, format_row, HEADER, replay, summary
     from pcrp_ros.bags import read_bag
     from pcrp_ros.node import PcrpNode
 
@@ -65,13 +64,10 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
             row = {'topic': cloud['topic'], 'stamp': f'{key[0]}.{key[1]:09d}', 'status': 'ok',
                    'latency_ms': 1e3 * (time.monotonic() - t_sent), 'gallery_id': gid,
                    'category': node.model.category_of(gid)}
+            p = msg.pose.position
             if gt:
-                err = np.degrees(
-                    np.arccos(np.clip((np.trace(R.T @ np.array(gt['rotation'])) - 1) / 2, -1, 1))
-                )
-                row.update(
-                    true_id=gt['gallery_id'], true_category=gt['category'], rot_err=float(err)
-                )
+                row.update(true_id=gt['gallery_id'], true_category=gt['category'],
+                           **answer_quality(node.model, gid, R, [p.x, p.y, p.z], gt))
             rows.append(row)
             print(format_row(row), flush=True)
 

@@ -14,7 +14,8 @@
 
 """Bags: make-bag writes clouds with ground truth, process answers them into a results bag."""
 import numpy as np
-from pcrp_core import default_model_path, PCRP
+from helpers import PROCEDURAL_MODEL
+from pcrp_core import PCRP
 from pcrp_ros.bag_commands import make_bag, process_bag, summary
 from pcrp_ros.bags import CLOUD, POSE, read_bag
 import pytest
@@ -35,7 +36,7 @@ def test_make_bag_then_process_it(tmp_path, storage):
             h.stamp.nanosec,
         ) in truths and h.frame_id == 'camera_optical_frame'
         assert c['points'][:, 2].min() > 0.5        # in front of the camera
-    model = PCRP.load(default_model_path())
+    model = PCRP.load(PROCEDURAL_MODEL)
     rows = process_bag(bag, tmp_path / 'out', model, quiet=True)
     assert len(rows) == 6 and all('true_id' in r for r in rows)
     answered = [r for r in rows if r['status'] == 'ok']
@@ -55,7 +56,7 @@ def test_upright_objects_before_a_level_camera_are_answered_upright_when_told_up
     bag = tmp_path / 'level'
     make_bag(bag, 'procedural:20', count=20, rate=10, seed=4, upright=True)
     clouds, truths, _ = read_bag(bag)
-    model = PCRP.load(default_model_path())
+    model = PCRP.load(PROCEDURAL_MODEL)
     for gt in truths.values():   # each object's up axis is the camera's up
         np.testing.assert_allclose(
             np.array(gt['rotation']) @ model.up_axis, UP_IN_LEVEL_CAMERA, atol=1e-9
@@ -96,7 +97,7 @@ def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path
     rows = process_bag(
         bag,
         tmp_path / 'out',
-        PCRP.load(default_model_path()),
+        PCRP.load(PROCEDURAL_MODEL),
         quiet=True,
         topics=['segmented_object'],
     )
@@ -137,7 +138,7 @@ def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path
         timeout=120,
     )
     assert out.returncode == 2 and 'up must be' in out.stderr and 'Traceback' not in out.stderr
-    model, seen = PCRP.load(default_model_path()), []
+    model, seen = PCRP.load(PROCEDURAL_MODEL), []
     estimate = model.estimate
     model.estimate = lambda points, **kw: seen.append(kw['up']) or estimate(points, **kw)
     process_bag(

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """A gallery of meshes end to end: build (templates, calibration, twins), save, load, answer views."""
 import numpy as np
 import open3d as o3d
@@ -81,3 +95,12 @@ def test_an_object_the_gallery_does_not_hold_is_less_sure_than_one_it_does(mesh_
     unknown = [model.estimate(sample_scene(torus, 'torus', 9, v, 'free', seed=7).points,
                               viewpoint=np.zeros(3)).confidence for v in range(3)]
     assert min(known) > max(unknown)
+
+
+def test_a_gallery_of_one_mesh_builds_and_answers_without_a_calibration():
+    # with nothing to answer instead, no answer can be wrong: there is nothing to learn from
+    mesh = _mesh(SHAPES['can']())
+    model = PCRP.build([GalleryObject('can', 'can', mesh.sample(1024), mesh=mesh)], n_jobs=1)
+    assert model.view_calibration is None and model.meta['twins'] == []
+    r = model.estimate(sample_scene(mesh, 'can', 0, 0, 'free', seed=3).points, viewpoint=np.zeros(3))
+    assert r.gallery_id == 'can' and 0.0 < r.confidence <= 1.0

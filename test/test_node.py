@@ -16,9 +16,9 @@
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
-from helpers import random_pose, rotation_error_deg
+from helpers import PROCEDURAL_MODEL, random_pose, rotation_error_deg
 import numpy as np
-from pcrp_core import default_model_path, InvalidCloud, PCRP
+from pcrp_core import InvalidCloud, PCRP
 from pcrp_ros.conversions import xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode
 import pytest
@@ -32,7 +32,7 @@ from std_msgs.msg import Header, String
 
 @pytest.fixture(scope='module')
 def model():
-    return PCRP.load(default_model_path())
+    return PCRP.load(PROCEDURAL_MODEL)
 
 
 class Listener:

@@ -23,7 +23,8 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 import numpy as np
-from pcrp_core import default_model_path, ModelError, PCRP
+from helpers import PROCEDURAL_MODEL
+from pcrp_core import ModelError, PCRP
 from pcrp_ros.conversions import xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode
 import pytest
@@ -39,7 +40,7 @@ from tools.faults import damaged_copy, FAULTS, handled, try_fault
 
 @pytest.fixture(scope='module')
 def model():
-    return PCRP.load(default_model_path())
+    return PCRP.load(PROCEDURAL_MODEL)
 
 
 @pytest.fixture(scope='module')
@@ -76,9 +77,9 @@ def test_a_broken_model_stops_the_node_and_the_cli_with_one_clear_line(fault, tm
     cloud = tmp_path / 'cloud.npy'
     np.save(cloud, np.random.default_rng(0).normal(size=(200, 3)))
     with pytest.raises(ModelError, match=fault.words):
-        PCRP.load(damaged_copy(fault, default_model_path(), tmp_path))
+        PCRP.load(damaged_copy(fault, PROCEDURAL_MODEL, tmp_path))
     for program in ('node', 'cli'):
-        result = try_fault(fault, program, default_model_path(), tmp_path, cloud)
+        result = try_fault(fault, program, PROCEDURAL_MODEL, tmp_path, cloud)
         assert handled(fault, result, str(tmp_path / fault.name)), (
             program,
             result.returncode,
@@ -131,7 +132,7 @@ def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
     with ros_context() as ctx:
         first = PcrpNode(model=model, context=ctx, parameter_overrides=only)
         second = PcrpNode(
-            model=PCRP.load(default_model_path()),
+            model=PCRP.load(PROCEDURAL_MODEL),
             node_name='pcrp_node_2',
             context=ctx,
             parameter_overrides=only,

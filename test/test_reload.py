@@ -24,7 +24,8 @@ import threading
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
 import numpy as np
-from pcrp_core import default_model_path, PCRP
+from helpers import PROCEDURAL_MODEL
+from pcrp_core import PCRP
 from pcrp_core.model_io import ARRAYS_FILE
 from pcrp_ros import answering
 from pcrp_ros.conversions import xyz_to_pointcloud2
@@ -42,7 +43,7 @@ TOPIC = 'reload_object'
 
 
 def _copy(tmp_path, name):
-    return str(shutil.copytree(default_model_path(), tmp_path / name))
+    return str(shutil.copytree(PROCEDURAL_MODEL, tmp_path / name))
 
 
 def _damage(path):

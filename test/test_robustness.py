@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from helpers import rotation_error_deg
-from pcrp_core import InvalidCloud, PCRP, default_model_path
+from helpers import PROCEDURAL_MODEL, rotation_error_deg
+from pcrp_core import InvalidCloud, PCRP
 from pcrp_core.sources.procedural import generate_object
 
 
 @pytest.fixture(scope="module")
 def model():
-    return PCRP.load(default_model_path())
+    return PCRP.load(PROCEDURAL_MODEL)
 
 
 def _answer_or_reason(model, cloud):

@@ -66,7 +66,7 @@ def test_worker_processes_answer_and_a_killed_one_is_replaced(monkeypatch):
             client.create_subscription(PoseStamped, f'/{t}/pose', poses[t].append, 10)
         pubs = {t: client.create_publisher(PointCloud2, f'/{t}', QoSProfile(depth=5))
                 for t in TOPICS}
-        gids = model.gallery_ids[3], model.gallery_ids[60]
+        gids = model.gallery_ids[3], model.gallery_ids[10]
         clouds = {t: model.gallery_cloud(g).astype(np.float64) + [0.0, 0.0, 2.0]
                   for t, g in zip(TOPICS, gids)}
 

@@ -21,6 +21,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 CALIBRATION_SEED = 2_000_003
+# views answered for calibration, in all: enough for a logistic regression of a dozen features
+# whatever the gallery's size, so each object of a small gallery gets more (at most 12 per kind)
+CALIBRATION_VIEWS = 600
 FEATURES = ('cost', 'unexplained', 'unshown', 'fit', 'coverage', 'margin', 'coarse_margin', 'rms_ratio',
             'log_points', 'off_noise', 'missing_noise')
 TWIN_RATIO = 1.3
@@ -61,6 +64,8 @@ def answer_view(model, index: int, scene) -> dict:
     truth = tpl.points[index] @ scene.R.T + scene.t
     out = {'index': index, 'occluded': scene.occluded, 'diameter': float(tpl.diameter[index])}
     for name, exclude in (('known', ()), ('unknown', (index,))):
+        if exclude and len(tpl) < 2:   # a gallery of one object has nothing to answer with instead
+            continue
         m = model.matcher.match(points, model.instance_options, up, up_object, np.random.default_rng(0),
                                 exclude=exclude)
         b = m.best
@@ -75,7 +80,7 @@ def find_twins(views: list[dict]) -> list[tuple[int, int]]:
     (median; that answer may itself be the twin)."""
     ratios, answers = defaultdict(list), defaultdict(list)
     for v in views:
-        if v['occluded']:
+        if v['occluded'] or 'unknown' not in v:
             continue
         ratios[v['index']].append(v['unknown']['cost'] / max(v['known']['cost'], 1e-9))
         answers[v['index']].append(v['unknown']['answer'])
@@ -95,24 +100,29 @@ def labelled_samples(views: list[dict], twins: list[tuple[int, int]]) -> tuple[l
     same = lambda i, j: i == j or frozenset((i, j)) in pairs   # noqa: E731
     X, y = [], []
     for v in views:
-        k, u = v['known'], v['unknown']
+        k = v['known']
         X.append(k['features'])
         y.append(same(k['answer'], v['index']) and k['error'] < POSE_RIGHT * v['diameter'])
-        if not same(u['answer'], v['index']):
-            X.append(u['features'])
+        if 'unknown' in v and not same(v['unknown']['answer'], v['index']):
+            X.append(v['unknown']['features'])
             y.append(False)
     return X, y
 
 
-def calibrate(model, meshes: list, n_jobs=None, progress=None, views_per_object: int = 2):
+def calibrate(model, meshes: list, n_jobs=None, progress=None, views_per_object: int | None = None):
     """(Calibration of the model's instance answers, twin pairs as gallery IDs), learnt on views
-    of its own meshes."""
+    of its own meshes; no Calibration when the views give no wrong answer to learn from (a gallery
+    of one object), and the confidence is then a monotone stand-in (instance/answer.py)."""
     from pcrp_core.confidence import fit_calibration
     from pcrp_core.parallel import calibration_answers, parallel_map
 
+    if views_per_object is None:
+        kinds = 2 if model.up_axis is not None else 1
+        views_per_object = int(np.clip(CALIBRATION_VIEWS // (kinds * len(meshes)), 2, 12))
     views = calibration_views(meshes, model.up_axis, views_per_object)
     answered = parallel_map(calibration_answers, views, {'model': model}, n_jobs, progress, 'calibration')
     twins = find_twins(answered)
     X, y = labelled_samples(answered, twins)
     ids = model.gallery.ids
-    return fit_calibration(X, y, FEATURES), [[ids[i], ids[j]] for i, j in twins]
+    calibration = fit_calibration(X, y, FEATURES) if 0 < sum(y) < len(y) else None
+    return calibration, [[ids[i], ids[j]] for i, j in twins]

@@ -10,9 +10,14 @@ __all__ = ["GalleryObject", "load_source", "load_sources"]
 
 def load_source(spec: str, split: str = "train", n_points: int = 1024, seed: int = 0,
                 limit_per_category: int | None = None) -> list[GalleryObject]:
-    """`procedural[:N]` (the embedded generator, N per category, default 25), a ModelNet40
+    """`household[:N]` (the embedded gallery of household meshes in metres, or N variants of its
+    kinds), `procedural[:N]` (the embedded generator, N per category, default 25), a ModelNet40
     category archive (`chair.npz`), or a folder of meshes or clouds (one object per file, or one
     sub-folder per category)."""
+    if spec == "household" or spec.startswith("household:"):
+        from pcrp_core.sources.household import household_gallery
+
+        return household_gallery(int(spec.split(":", 1)[1]) if ":" in spec else None, seed=seed, n_points=n_points)
     if spec == "procedural" or spec.startswith("procedural:"):
         from pcrp_core.sources.procedural import generate_gallery
 
