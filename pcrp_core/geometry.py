@@ -19,6 +19,20 @@ def angle_deg(a, b) -> float:
     return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
 
 
+def rotation_taking(a, b) -> np.ndarray:
+    """The least rotation taking direction a onto direction b (any lengths). Written out: scipy's
+    Rotation.align_vectors of one pair of vectors gives other answers before scipy 1.12."""
+    a = np.asarray(a, dtype=np.float64) / np.linalg.norm(a)
+    b = np.asarray(b, dtype=np.float64) / np.linalg.norm(b)
+    v, c = np.cross(a, b), float(a @ b)
+    if c < -1 + 1e-12:   # opposite: a half turn about any axis normal to them
+        n = np.cross(a, [1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.cross(a, [0.0, 1.0, 0.0])
+        n = n / np.linalg.norm(n)
+        return 2.0 * np.outer(n, n) - np.eye(3)
+    K = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    return np.eye(3) + K + K @ K / (1.0 + c)
+
+
 def normalised(points: np.ndarray, unit: float, centre=None) -> np.ndarray:
     """points in a model's normalised units: centred on their centroid (or centre), divided by
     the model-wide unit, so the features' radii mean the same for every object."""

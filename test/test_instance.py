@@ -19,6 +19,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from pcrp_core.confidence import expected_calibration_error, fit_calibration, reliability
+from pcrp_core.geometry import rotation_taking
 from pcrp_core.instance import hypotheses
 from pcrp_core.instance.signatures import SECTORS, ray_frame, shift_costs, signature
 from pcrp_core.instance.templates import Templates, object_templates, stack, TemplateSettings
@@ -49,10 +50,11 @@ def test_a_roll_about_the_line_of_sight_shifts_the_signature_by_as_many_sectors(
 
 def test_taking_and_about_are_the_rotations_they_say():
     a, b = np.array([0.0, 0.6, 0.8]), np.array([1.0, 0.0, 0.0])
-    R = hypotheses.taking(a, b)
+    R = rotation_taking(a, b)
     np.testing.assert_allclose(R @ a, b, atol=1e-12)
     np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
-    np.testing.assert_allclose(hypotheses.taking(a, -a) @ a, -a, atol=1e-12)
+    np.testing.assert_allclose(rotation_taking(a, -a) @ a, -a, atol=1e-12)
+    np.testing.assert_allclose(rotation_taking(2 * a, b) @ a, b, atol=1e-12)
     Rz = hypotheses.about(np.array([0.0, 0.0, 1.0]), [np.pi / 2])[0]
     np.testing.assert_allclose(Rz @ [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], atol=1e-12)
 

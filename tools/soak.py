@@ -104,6 +104,22 @@ class _Diagnostics:
         return float(self.values.get(topic, {}).get(key, default))
 
 
+def camera_clouds(n: int) -> list[GoodCloud]:
+    """The shipped demo bag's depth-camera views of the shipped gallery: what the node meets when
+    run as `make demo` runs it (thousands of points each, not a few hundred)."""
+    from pcrp_ros.bags import read_bag
+    from pcrp_ros.demo import DEMO_BAG
+
+    clouds, truths, _ = read_bag(DEMO_BAG)
+    out = []
+    for c in clouds[:n]:
+        hdr = c['msg'].header
+        gt = truths.get((c['topic'], hdr.stamp.sec, hdr.stamp.nanosec), {})
+        out.append(GoodCloud(np.asarray(c['points'], dtype=np.float64), gt.get('gallery_id', ''),
+                             np.asarray(gt.get('rotation', np.eye(3)))))
+    return out
+
+
 def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
         model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print,
         workers: int = 1) -> dict:
@@ -119,8 +135,9 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
 
     model = PCRP.load(model_path)
     rng = np.random.default_rng(seed)
-    goods = [good_cloud(model, seed=s, gallery_index=int(i))
-             for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))]
+    goods = (camera_clouds(16) if model_path is None else
+             [good_cloud(model, seed=s, gallery_index=int(i))
+              for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))])
     bads = refused_on_arrival()
     topics = [f"pcrp_soak/object_{k}" for k in range(n_topics)]
     nodes = _NodeProcesses(topics, processes, model_path, workers)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from pcrp_core.geometry import rotation_taking
 from pcrp_core.instance.signatures import ray_frame, shift_angle, shift_costs, signature
 
 
@@ -16,17 +17,6 @@ def about(axis: np.ndarray, angles) -> np.ndarray:
     angles = np.asarray(angles, dtype=np.float64)
     s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
     return np.eye(3)[None] + s * K[None] + (1.0 - c) * (K @ K)[None]
-
-
-def taking(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The shortest rotation taking unit vector a onto unit vector b."""
-    v, c = np.cross(a, b), float(a @ b)
-    if c < -1 + 1e-9:   # opposite: any half turn about an axis normal to them
-        n = np.cross(a, [1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.cross(a, [0.0, 1.0, 0.0])
-        n = n / np.linalg.norm(n)
-        return 2.0 * np.outer(n, n) - np.eye(3)
-    K = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-    return np.eye(3) + K + K @ K / (1.0 + c)
 
 
 class QueryView:
@@ -59,7 +49,7 @@ def upright(query: QueryView, up_camera: np.ndarray, up_object: np.ndarray, came
     """Poses keeping the object's up axis on the known up direction, turned every 360/n degrees
     about it (a yaw search: an object standing on a table is known but for its heading). Each
     pose's centroid is that of the stored view seen from nearest where the camera then stands."""
-    R = about(up_camera, np.arange(n) * (2 * np.pi / n)) @ taking(up_object, up_camera)
+    R = about(up_camera, np.arange(n) * (2 * np.pi / n)) @ rotation_taking(up_object, up_camera)
     # where the camera stands, seen from the object: towards it from the query's centroid,
     # in the object's frame under each pose
     toward = np.einsum('hji,j->hi', R, -query.centre)

@@ -47,17 +47,24 @@ class InstanceMatcher:
     """Matches clouds from a camera against a gallery's templates (see templates.py)."""
 
     def __init__(self, templates: Templates):
-        import open3d as o3d
-
         self.templates = templates
         self.directions = templates.directions
-        self.surfaces, self.clouds = [], []
-        for points, normals, spacing in zip(templates.points, templates.normals, templates.spacing):
-            self.surfaces.append(Surface(points, normals, cKDTree(points), float(spacing)))
+        # each object's tree and Open3D cloud, made when it is first shortlisted: a large gallery
+        # loads at once, and only the objects a stream meets take memory
+        self._surfaces: dict[int, tuple[Surface, object]] = {}
+
+    def surface(self, i: int) -> tuple[Surface, object]:
+        """Object i's Surface (tree, normals, spacing) and Open3D cloud with normals, for ICP."""
+        if i not in self._surfaces:
+            import open3d as o3d
+
+            tpl = self.templates
+            points, normals = tpl.points[i], tpl.normals[i]
             # copies: Open3D refuses read-only arrays (a worker process's memory-mapped model)
             cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.array(points, dtype=np.float64)))
             cloud.normals = o3d.utility.Vector3dVector(np.array(normals, dtype=np.float64))
-            self.clouds.append(cloud)
+            self._surfaces[i] = (Surface(points, normals, cKDTree(points), float(tpl.spacing[i])), cloud)
+        return self._surfaces[i]
 
     def shortlist(self, shape: np.ndarray, n: int, exclude=()) -> np.ndarray:
         """Indices of the n objects with a view nearest the query's shape, nearest first."""
@@ -90,7 +97,7 @@ class InstanceMatcher:
             else:
                 R, t, v = hypotheses.from_views(view, tpl.frames[i], tpl.signatures[i], tpl.view_centres[i],
                                                 opts.silhouette_poses)
-            cost = hypotheses.coarse_cost(R, t, v, sample, self.surfaces[i].tree, tpl.samples[i], query.tree)
+            cost = hypotheses.coarse_cost(R, t, v, sample, self.surface(i)[0].tree, tpl.samples[i], query.tree)
             best = np.argsort(cost)[: opts.poses_refined]
             ranked.append((float(cost[best[0]]), int(i), R[best], t[best]))
         ranked.sort(key=lambda r: r[0])
@@ -105,10 +112,11 @@ class InstanceMatcher:
             reach = float(np.clip(0.15 * tpl.diameter[i], 2 * tau, 0.03))
             stages = ((reach, reach / 2, 30), (2 * tau, tau, 20))
             for R, t in zip(Rs, ts):
-                R, t = icp_point_to_plane(source, self.clouds[i], R, t, stages)
+                surface, cloud = self.surface(i)
+                R, t = icp_point_to_plane(source, cloud, R, t, stages)
                 clock.lap('refinement')
                 expected = visible_points(tpl.visible[i], self.directions, tpl.centre[i], R, t)
-                fit = judge(query, self.surfaces[i], expected, R, t, tau, opts.unshown_weight)
+                fit = judge(query, surface, expected, R, t, tau, opts.unshown_weight)
                 if i not in best_of or fit.cost < best_of[i].fit.cost:
                     best_of[i] = Candidate(i, R, t, fit)
                 clock.lap('verification')
