@@ -26,12 +26,14 @@ does the work in four steps that map onto the lifecycle transitions:
 
 The plain node runs configure and activate in its constructor. Clouds are checked on arrival
 (cheap), so every unusable one is refused and counted under its reason however busy the
-workers are; usable ones wait in one slot per topic, a newer cloud replacing the one waiting
-(counted as dropped_stale), and `workers` threads answer the oldest-waiting topic first.
+workers are; usable ones wait in a short queue per topic (`queue_size`: a cloud arriving at a
+full queue pushes out its oldest, counted as dropped_stale, so a slow model never builds a
+backlog), and `workers` threads answer the oldest waiting cloud of any topic first.
 """
 
 from __future__ import annotations
 
+import collections
 import threading
 import time
 
@@ -236,8 +238,9 @@ class CloudAnswerer:
         """
         with self._cv:
             self._running = False
-            for topic in self._slots:   # received, never to be answered: accounted for
-                self.stats[topic].count('dropped_stale')
+            for topic, waiting in self._slots.items():   # received, never to be answered
+                for _ in waiting:
+                    self.stats[topic].count('dropped_stale')
             self._slots.clear()
             self._cv.notify_all()
         for t in self._threads:
@@ -394,7 +397,7 @@ class CloudAnswerer:
         """
         Refuse an unreadable cloud at once (cheap), or queue it.
 
-        The newest cloud of a topic replaces any still waiting.
+        A cloud arriving at a full queue pushes out the topic's oldest waiting one.
         """
         received = time.monotonic()
         stats = self.stats[topic]
@@ -412,9 +415,11 @@ class CloudAnswerer:
             self.reject(topic, 'internal_error', f'{type(e).__name__}: {e}')
             return
         with self._cv:
-            if topic in self._slots:
+            waiting = self._slots.setdefault(topic, collections.deque())
+            while len(waiting) >= self.settings.queue_size:
+                waiting.popleft()
                 stats.count('dropped_stale')
-            self._slots[topic] = (msg.header, points, received)
+            waiting.append((msg.header, points, received))
             self._cv.notify()
 
     def _next(self, k: int, engine):
@@ -435,8 +440,13 @@ class CloudAnswerer:
                 self._cv.wait(min(wait, 1.0))
                 continue
             if self._slots:
-                topic = next(iter(self._slots))   # oldest-waiting topic first: fair
-                return ('answer', topic, self._slots.pop(topic))
+                # the oldest waiting cloud of any topic first: fair, and no cloud waits longest
+                topic = min(self._slots, key=lambda t: self._slots[t][0][2])
+                waiting = self._slots[topic]
+                item = waiting.popleft()
+                if not waiting:
+                    del self._slots[topic]
+                return ('answer', topic, item)
             self._cv.wait()
 
     def _work(self, k: int) -> None:

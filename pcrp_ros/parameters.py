@@ -56,6 +56,9 @@ class NodeSettings(Options):
     qos_depth: int = setting(2, 'Input QoS queue depth.', low=1, high=100, read_only=True)
     log_throttle_sec: float = setting(
         5.0, 'Least seconds between two log lines of one kind.', low=0.0, high=3600.0)
+    queue_size: int = setting(
+        2, 'Clouds of one topic that may wait to be answered; when one more arrives the oldest is '
+        'dropped (counted as dropped_stale). 1: only the newest waits.', low=1, high=100)
     workers: int = setting(
         1, 'Clouds answered at once. 1: in a thread of the node; more: that many worker '
         'processes, each with its own copy of the model (about one per core).',

@@ -13,6 +13,8 @@
 # limitations under the License.
 
 """The node over real DDS: outputs, headers, agreement with the core, bad input, parameters."""
+import threading
+
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
@@ -310,3 +312,31 @@ def test_a_mistyped_or_out_of_range_parameter_stops_the_node_with_one_clear_line
         out.returncode == 1 and 'pcrp_node: error:' in out.stderr and 'Traceback' not in out.stderr
     ), out.stderr
     assert override.split(':=')[0] in out.stderr
+
+
+@pytest.mark.parametrize('queue_size, answered, dropped', [(2, 3, 1), (1, 2, 2)])
+def test_a_short_queue_absorbs_a_slow_answer_and_pushes_out_the_oldest(
+        model, monkeypatch, queue_size, answered, dropped):
+    # four clouds arrive while the first is being answered: it is answered, queue_size of the
+    # other three wait and are answered in their turn, the oldest of the rest is dropped
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=[
+            Parameter('queue_size', value=queue_size), Parameter('sensor_at_origin', value=False)])
+        release, started = threading.Event(), threading.Event()
+        real = model.estimate
+
+        def slow(*args, **kwargs):
+            started.set()
+            assert release.wait(30)
+            return real(*args, **kwargs)
+        monkeypatch.setattr(model, 'estimate', slow)
+        cloud = model.gallery_cloud(model.gallery_ids[0]).astype(np.float64) + [0.0, 0.0, 2.0]
+        stats = node.stats['segmented_object']
+        node.answerer._on_cloud('segmented_object', xyz_to_pointcloud2(cloud, _header(1)))
+        assert started.wait(30)
+        for sec in (2, 3, 4):
+            node.answerer._on_cloud('segmented_object', xyz_to_pointcloud2(cloud, _header(sec)))
+        assert stats.counts['dropped_stale'] == dropped
+        release.set()
+        assert wait_for(lambda: stats.counts['answered'] + stats.counts['rejected'] == answered, 30)
+        node.destroy_node()
