@@ -26,7 +26,7 @@ CALIBRATION_SEED = 2_000_003
 CALIBRATION_VIEWS = 600
 FEATURES = ('cost', 'unexplained', 'unshown', 'fit', 'coverage', 'margin', 'coarse_margin', 'rms_ratio',
             'log_points', 'off_noise', 'missing_noise')
-TWIN_RATIO = 1.3
+TWIN_RATIO = 1.4
 POSE_RIGHT = 0.1   # of the object's diameter, as ADD-S counts it
 
 
