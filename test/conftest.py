@@ -9,6 +9,17 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 from helpers import MODELNET, modelnet  # noqa: E402
 
+GROUPS = ('unit', 'integration', 'ros', 'tools')
+
+
+def pytest_collection_modifyitems(items):
+    """Mark each test with its group, the folder it lives in, so `-m unit` or `-m "not ros"`
+    selects by what a test needs rather than by file names."""
+    for item in items:
+        group = Path(str(item.fspath)).parent.name
+        if group in GROUPS:
+            item.add_marker(getattr(pytest.mark, group))
+
 
 @pytest.fixture(scope="session")
 def small_model(tmp_path_factory):

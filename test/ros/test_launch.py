@@ -29,7 +29,7 @@ import types
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 STUBBED = ['ament_index_python', 'ament_index_python.packages', 'launch', 'launch.actions',
            'launch.conditions', 'launch.events', 'launch.substitutions', 'launch_ros',
            'launch_ros.actions', 'launch_ros.event_handlers', 'launch_ros.events',

@@ -24,7 +24,7 @@ from pcrp_core.config import PAPER_POSE, PoseOptions, QueryOptions
 from pcrp_ros.parameters import descriptor, markdown_table, NodeSettings, parameters, params_file
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_the_committed_params_file_is_the_one_the_settings_make():

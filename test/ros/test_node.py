@@ -245,7 +245,7 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path
     import sys
     import time
     from pathlib import Path
-    shipped = (Path(__file__).resolve().parents[1] / 'config' / 'pcrp.yaml').read_text()
+    shipped = (Path(__file__).resolve().parents[2] / 'config' / 'pcrp.yaml').read_text()
     config = tmp_path / 'pcrp.yaml'
     config.write_text(
         shipped.replace('input_topics: ["segmented_object"]', 'input_topics: ["cam_a/object"]')

@@ -32,7 +32,7 @@ from xml.etree import ElementTree
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 # Python modules -> (rosdep key, PyPI distribution)
 PYTHON_DEPENDENCIES = {
     'numpy': ('python3-numpy', 'numpy'),
