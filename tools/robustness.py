@@ -171,8 +171,8 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
         f"Regenerate with `{command}` (about {'15' if soak and soak['duration_s'] >= 600 else 'a few'} minutes). "
         f"Made {time.strftime('%Y-%m-%d')} on {platform.machine()}, Python {platform.python_version()}. "
         "Every row below was produced by running the real thing, and the same catalogues "
-        "(`pcrp_ros/bad_clouds.py`, `pcrp_ros/faults.py`, `pcrp_ros/robustness.py`) are run by the test "
-        "suite (`test/test_node_robustness.py`, `test/test_bags.py`), so each row is also a passing test.",
+        "(`tools/bad_clouds.py`, `tools/faults.py`, `tools/robustness.py`) are run by the test "
+        "suite (`test/ros/test_node_robustness.py`, `test/integration/test_bags.py`), so each row is also a passing test.",
         "",
         "## Bad clouds, sent to the running node over DDS",
         "",
