@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """`pcrp` command line: build | query | eval (core); make-bag | replay | process | demo are added by pcrp_ros.
 
 Each subcommand lives in a `register(subparsers)` function that adds its parser and sets
@@ -15,8 +29,8 @@ import time
 # Options whose values may start with a minus (an axis "-y", a vector "-1,0,0"). argparse takes
 # such a value for an option of its own unless it is written "--up=-1,0,0"; joined before parsing,
 # "--up -1,0,0" works as a user would type it.
-SIGNED_OPTIONS = ("--up", "--up-axis", "--viewpoint")
-_SIGNED_VALUE = re.compile(r"-(?:[xyz]|[\d.][\d.,eE+-]*)")
+SIGNED_OPTIONS = ('--up', '--up-axis', '--viewpoint')
+_SIGNED_VALUE = re.compile(r'-(?:[xyz]|[\d.][\d.,eE+-]*)')
 
 
 def _progress(it, **kw):
@@ -25,31 +39,31 @@ def _progress(it, **kw):
 
 
 def _fail(message: str) -> int:
-    print(f"pcrp: error: {message}", file=sys.stderr)
+    print(f'pcrp: error: {message}', file=sys.stderr)
     return 2
 
 
 def register_build(sub) -> None:
-    p = sub.add_parser("build", help="build a gallery model from ModelNet40 archives, mesh/cloud folders or the generator",
-                       description="Build a model: fit FR-PointHop and the VLAD codebook on the gallery objects, "
-                                   "describe every object, and save the model directory.")
-    p.add_argument("sources", nargs="+", help="ModelNet40 archive (chair.npz), folder with one sub-folder per "
-                                              "category of meshes/clouds, or procedural[:N]")
-    p.add_argument("--out", required=True, help="model directory to write")
-    p.add_argument("--split", default="train", choices=["train", "test"], help="archive split (default train)")
-    p.add_argument("--n-points", type=int, default=1024, help="points per gallery object (default 1024)")
-    p.add_argument("--hop1", default="fpfh", choices=["fpfh", "octant"],
-                   help="first-hop attribute: FPFH (FR-PointHop, default) or octant coordinates (R-PointHop)")
-    p.add_argument("--aggregation", default="vlad", choices=["vlad", "max"], help="global descriptor (default vlad)")
-    p.add_argument("--clusters", type=int, default=10, help="VLAD codebook size (default 10)")
-    p.add_argument("--views", type=int, default=0,
-                   help="also describe this many one-sided views per object, for depth-camera queries (default 0)")
-    p.add_argument("--limit", type=int, default=None, help="at most this many objects per source category")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--jobs", type=int, default=None, help="processes describing objects (default: one per core)")
-    p.add_argument("--up-axis", default=None, choices=["x", "y", "z", "-x", "-y", "-z"],
+    p = sub.add_parser('build', help='build a gallery model from ModelNet40 archives, mesh/cloud folders or the generator',
+                       description='Build a model: fit FR-PointHop and the VLAD codebook on the gallery objects, '
+                                   'describe every object, and save the model directory.')
+    p.add_argument('sources', nargs='+', help='ModelNet40 archive (chair.npz), folder with one sub-folder per '
+                                              'category of meshes/clouds, or procedural[:N]')
+    p.add_argument('--out', required=True, help='model directory to write')
+    p.add_argument('--split', default='train', choices=['train', 'test'], help='archive split (default train)')
+    p.add_argument('--n-points', type=int, default=1024, help='points per gallery object (default 1024)')
+    p.add_argument('--hop1', default='fpfh', choices=['fpfh', 'octant'],
+                   help='first-hop attribute: FPFH (FR-PointHop, default) or octant coordinates (R-PointHop)')
+    p.add_argument('--aggregation', default='vlad', choices=['vlad', 'max'], help='global descriptor (default vlad)')
+    p.add_argument('--clusters', type=int, default=10, help='VLAD codebook size (default 10)')
+    p.add_argument('--views', type=int, default=0,
+                   help='also describe this many one-sided views per object, for depth-camera queries (default 0)')
+    p.add_argument('--limit', type=int, default=None, help='at most this many objects per source category')
+    p.add_argument('--seed', type=int, default=0)
+    p.add_argument('--jobs', type=int, default=None, help='processes describing objects (default: one per core)')
+    p.add_argument('--up-axis', default=None, choices=['x', 'y', 'z', '-x', '-y', '-z'],
                    help="the objects' up axis in their own frame, so queries may state which way is up "
-                        "(default: what the sources say: z for ModelNet40 and the generator, none for folders)")
+                        '(default: what the sources say: z for ModelNet40 and the generator, none for folders)')
     p.set_defaults(func=_build)
 
 
@@ -65,35 +79,35 @@ def _build(args) -> int:
                                limit_per_category=args.limit)
     except (OSError, ValueError) as e:
         return _fail(str(e))
-    print(f"{len(objects)} objects in {len(set(o.category for o in objects))} categories; fitting...", file=sys.stderr)
+    print(f'{len(objects)} objects in {len(set(o.category for o in objects))} categories; fitting...', file=sys.stderr)
     model = PCRP.build(objects, hop1=args.hop1, n_clusters=args.clusters, aggregation=args.aggregation,
                        n_points=args.n_points, views=args.views, seed=args.seed, sources=args.sources, progress=_progress,
                        n_jobs=args.jobs, up_axis=args.up_axis)
     model.save(args.out)
     size = model_size(args.out)
     print(f"built {args.out}: {len(objects)} objects, categories {', '.join(model.categories)}, "
-          f"feature dimension {model.pointhop.n_features_}, descriptor dimension {model.gallery.vectors.shape[1]}, "
-          f"{time.perf_counter() - t0:.1f} s, {size / 1e6:.2f} MB on disk "
-          f"({model.size_report()}); "
-          + (f"up axis {axis_name(model.up_axis)}" if model.up_axis is not None
-             else "no up axis recorded (--up-axis to give one)"))
+          f'feature dimension {model.pointhop.n_features_}, descriptor dimension {model.gallery.vectors.shape[1]}, '
+          f'{time.perf_counter() - t0:.1f} s, {size / 1e6:.2f} MB on disk '
+          f'({model.size_report()}); '
+          + (f'up axis {axis_name(model.up_axis)}' if model.up_axis is not None
+             else 'no up axis recorded (--up-axis to give one)'))
     return 0
 
 
 def register_query(sub) -> None:
-    p = sub.add_parser("query", help="retrieve the gallery object and its pose for one cloud file")
-    p.add_argument("model", help="model directory ('default' for the shipped one)")
-    p.add_argument("cloud", help="cloud file: PLY, PCD, XYZ or NPY (N, 3); meshes are sampled")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--candidates", type=int, default=None, help="gallery objects to verify (n_candidates)")
-    p.add_argument("--min-confidence", type=float, default=None, help="reject answers less confident than this")
-    p.add_argument("--min-score", type=float, default=None, dest="min_confidence", help=argparse.SUPPRESS)
-    p.add_argument("--up", default=None, metavar="X,Y,Z",
+    p = sub.add_parser('query', help='retrieve the gallery object and its pose for one cloud file')
+    p.add_argument('model', help="model directory ('default' for the shipped one)")
+    p.add_argument('cloud', help='cloud file: PLY, PCD, XYZ or NPY (N, 3); meshes are sampled')
+    p.add_argument('--json', action='store_true', help='print the result as JSON')
+    p.add_argument('--candidates', type=int, default=None, help='gallery objects to verify (n_candidates)')
+    p.add_argument('--min-confidence', type=float, default=None, help='reject answers less confident than this')
+    p.add_argument('--min-score', type=float, default=None, dest='min_confidence', help=argparse.SUPPRESS)
+    p.add_argument('--up', default=None, metavar='X,Y,Z',
                    help="which way is up in the cloud's frame, if known: answers then keep the object upright "
-                        "within --up-tolerance")
-    p.add_argument("--up-tolerance", type=float, default=None, metavar="DEG",
-                   help="how far an answer may tip the object from --up (default 60)")
-    p.add_argument("--viewpoint", default=None, metavar="X,Y,Z",
+                        'within --up-tolerance')
+    p.add_argument('--up-tolerance', type=float, default=None, metavar='DEG',
+                   help='how far an answer may tip the object from --up (default 60)')
+    p.add_argument('--viewpoint', default=None, metavar='X,Y,Z',
                    help="where the sensor was in the cloud's frame, when the cloud is one sensor's view "
                         "(0,0,0 for a cloud in the camera's own frame, as a depth driver publishes it)")
     p.set_defaults(func=_query)
@@ -104,22 +118,22 @@ def _query(args) -> int:
     from pcrp_core.sources.folder import read_points
 
     try:
-        model = PCRP.load(None if args.model == "default" else args.model)
+        model = PCRP.load(None if args.model == 'default' else args.model)
     except ModelError as e:
         return _fail(str(e))
     try:
         points = read_points(args.cloud)
     except (OSError, ValueError) as e:
-        return _fail(f"{args.cloud}: {e}")
-    opts = {k: v for k, v in (("n_candidates", args.candidates), ("min_confidence", args.min_confidence),
-                              ("up_tolerance_deg", args.up_tolerance)) if v is not None}
+        return _fail(f'{args.cloud}: {e}')
+    opts = {k: v for k, v in (('n_candidates', args.candidates), ('min_confidence', args.min_confidence),
+                              ('up_tolerance_deg', args.up_tolerance)) if v is not None}
     try:
         up = parse_up(args.up)
-        viewpoint = parse_up(args.viewpoint, "--viewpoint")
+        viewpoint = parse_up(args.viewpoint, '--viewpoint')
         model.set_params(**opts)
         result = model.estimate(points, viewpoint=viewpoint, up=up)
     except (InvalidCloud, ValueError) as e:
-        return _fail(f"{args.cloud}: {e}")
+        return _fail(f'{args.cloud}: {e}')
     if args.json:
         print(json.dumps(result.to_dict(), indent=1))
         return 0
@@ -128,27 +142,27 @@ def _query(args) -> int:
 
 
 def register_eval(sub) -> None:
-    p = sub.add_parser("eval", help="how good a model is on your own meshes, seen by a simulated depth camera",
-                       description="Render seeded depth-camera views of every mesh in a folder (metres; 640x480, "
-                                   "f=600, range noise growing with depth; perfectly segmented), answer them with the "
-                                   "model as the node would, and print per-family and overall rates: right object, "
-                                   "pose right (ADD-S < 10 % of the diameter), ADD-S AUC, error medians, wrong answers "
-                                   "accepted, right ones rejected, time per view.")
-    p.add_argument("meshes", help="folder of meshes in metres, as given to `pcrp build` (one object per file, or "
-                                  "one sub-folder per category)")
-    p.add_argument("--model", required=True,
+    p = sub.add_parser('eval', help='how good a model is on your own meshes, seen by a simulated depth camera',
+                       description='Render seeded depth-camera views of every mesh in a folder (metres; 640x480, '
+                                   'f=600, range noise growing with depth; perfectly segmented), answer them with the '
+                                   'model as the node would, and print per-family and overall rates: right object, '
+                                   'pose right (ADD-S < 10 % of the diameter), ADD-S AUC, error medians, wrong answers '
+                                   'accepted, right ones rejected, time per view.')
+    p.add_argument('meshes', help='folder of meshes in metres, as given to `pcrp build` (one object per file, or '
+                                  'one sub-folder per category)')
+    p.add_argument('--model', required=True,
                    help="model directory built from those meshes ('default' for the shipped one)")
-    p.add_argument("--views-per-object", type=int, default=2, help="views drawn per mesh (default 2)")
-    p.add_argument("--kind", default="free", choices=["free", "table"],
-                   help="free: any orientation in front of the camera; table: standing on its z axis, the camera "
-                        "looking down at 25-65 degrees (default free)")
-    p.add_argument("--occlusion", action="store_true", help="a box or cylinder hides 20-60 %% of each object's pixels")
-    p.add_argument("--up", action="store_true",
+    p.add_argument('--views-per-object', type=int, default=2, help='views drawn per mesh (default 2)')
+    p.add_argument('--kind', default='free', choices=['free', 'table'],
+                   help='free: any orientation in front of the camera; table: standing on its z axis, the camera '
+                        'looking down at 25-65 degrees (default free)')
+    p.add_argument('--occlusion', action='store_true', help="a box or cylinder hides 20-60 %% of each object's pixels")
+    p.add_argument('--up', action='store_true',
                    help="tell the model which way is up (the table's normal); needs --kind table and a model "
-                        "built with --up-axis")
-    p.add_argument("--seed", type=int, default=0, help="seed of the views (default 0); views of seed S are the same "
-                                                       "whatever else is drawn")
-    p.add_argument("--json", default=None, metavar="FILE", help="also write the summary and per-view records here")
+                        'built with --up-axis')
+    p.add_argument('--seed', type=int, default=0, help='seed of the views (default 0); views of seed S are the same '
+                                                       'whatever else is drawn')
+    p.add_argument('--json', default=None, metavar='FILE', help='also write the summary and per-view records here')
     p.set_defaults(func=_eval)
 
 
@@ -159,11 +173,11 @@ def _eval(args) -> int:
     from pcrp_core.sources import load_source
 
     if args.views_per_object < 1:
-        return _fail("--views-per-object must be at least 1")
-    if args.up and args.kind != "table":
-        return _fail("--up needs --kind table: free views have no up")
+        return _fail('--views-per-object must be at least 1')
+    if args.up and args.kind != 'table':
+        return _fail('--up needs --kind table: free views have no up')
     try:
-        model = PCRP.load(None if args.model == "default" else args.model)
+        model = PCRP.load(None if args.model == 'default' else args.model)
     except ModelError as e:
         return _fail(str(e))
     if args.up:
@@ -181,7 +195,7 @@ def _eval(args) -> int:
         print(f"pcrp eval: {len(skipped)} clouds skipped (a view is rendered from a mesh): {', '.join(skipped[:5])}",
               file=sys.stderr)
     if not meshes:
-        return _fail(f"{args.meshes}: no meshes to render")
+        return _fail(f'{args.meshes}: no meshes to render')
     unknown = [g for g in meshes if g not in model.gallery.index]
     if unknown:
         print(f"pcrp eval: {len(unknown)} of the meshes are not in the model's gallery, so can never be named: "
@@ -196,45 +210,45 @@ def _eval(args) -> int:
           f"{args.seed}{', up given' if args.up else ''}; model {args.model}")
     print(format_summary(summary))
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(jsonable({"settings": {k: v for k, v in vars(args).items() if k != "func"}, "summary": summary,
-                                "records": rows}), f, indent=1)
+        with open(args.json, 'w') as f:
+            json.dump(jsonable({'settings': {k: v for k, v in vars(args).items() if k != 'func'}, 'summary': summary,
+                                'records': rows}), f, indent=1)
     return 0
 
 
-def parse_up(text, option: str = "--up"):
+def parse_up(text, option: str = '--up'):
     """An option's X,Y,Z as three floats (None when not given); ValueError saying what is expected."""
     if text is None:
         return None
     try:
-        up = [float(v) for v in text.split(",")]
+        up = [float(v) for v in text.split(',')]
     except ValueError:
         up = []
     if len(up) != 3:
-        raise ValueError(f"{option} {text!r}: expected three numbers, e.g. 0,0,1")
+        raise ValueError(f'{option} {text!r}: expected three numbers, e.g. 0,0,1')
     return up
 
 
 def format_result(r) -> str:
     import numpy as np
 
-    rows = [f"gallery_id  {r.gallery_id}", f"category    {r.category}",
+    rows = [f'gallery_id  {r.gallery_id}', f'category    {r.category}',
             f"status      {'REJECTED: ' + r.reason if r.rejected else 'accepted'}",
-            f"confidence  {r.confidence:.3f}",
-            f"score       {r.score:.3f} (fitness {r.fitness:.3f}, inlier rmse {r.inlier_rmse:.4g}, chamfer {r.chamfer:.4f})",
-            f"scale       {r.scale:.4f}",
-            "rotation    " + np.array2string(np.asarray(r.rotation), precision=4, suppress_small=True,
-                                             prefix="            "),
-            "translation " + np.array2string(np.asarray(r.translation), precision=4, suppress_small=True),
-            "quaternion  (x, y, z, w) " + np.array2string(r.quaternion, precision=4, suppress_small=True),
-            "candidates  " + ", ".join(f"{g} ({d:.3f})" for g, d in r.candidates[:5]),
-            "timings ms  " + ", ".join(f"{k} {v * 1000:.1f}" for k, v in r.timings.items())]
-    return "\n".join(rows)
+            f'confidence  {r.confidence:.3f}',
+            f'score       {r.score:.3f} (fitness {r.fitness:.3f}, inlier rmse {r.inlier_rmse:.4g}, chamfer {r.chamfer:.4f})',
+            f'scale       {r.scale:.4f}',
+            'rotation    ' + np.array2string(np.asarray(r.rotation), precision=4, suppress_small=True,
+                                             prefix='            '),
+            'translation ' + np.array2string(np.asarray(r.translation), precision=4, suppress_small=True),
+            'quaternion  (x, y, z, w) ' + np.array2string(r.quaternion, precision=4, suppress_small=True),
+            'candidates  ' + ', '.join(f'{g} ({d:.3f})' for g, d in r.candidates[:5]),
+            'timings ms  ' + ', '.join(f'{k} {v * 1000:.1f}' for k, v in r.timings.items())]
+    return '\n'.join(rows)
 
 
 def build_parser(extensions=()) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="pcrp", description="PCRP point cloud object retrieval and pose estimation")
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser = argparse.ArgumentParser(prog='pcrp', description='PCRP point cloud object retrieval and pose estimation')
+    sub = parser.add_subparsers(dest='command', required=True)
     for register in (register_build, register_query, register_eval, *extensions):
         register(sub)
     return parser
@@ -245,7 +259,7 @@ def join_signed_values(argv: list[str]) -> list[str]:
     out: list[str] = []
     for arg in argv:
         if out and out[-1] in SIGNED_OPTIONS and _SIGNED_VALUE.fullmatch(arg):
-            out[-1] += "=" + arg
+            out[-1] += '=' + arg
         else:
             out.append(arg)
     return out
@@ -260,5 +274,5 @@ def main(argv=None) -> int:
     return run(build_parser(), argv)
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     sys.exit(main())

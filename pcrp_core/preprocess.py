@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Turning whatever a segmenter sends into a clean, bounded, centred cloud."""
 from __future__ import annotations
 
@@ -12,9 +26,9 @@ def finite_points(points) -> np.ndarray:
     """(N, 3) float64 of the rows with all-finite coordinates; refuses what is not a cloud."""
     arr = np.asarray(points)
     if arr.ndim != 2 or arr.shape[1] != 3:
-        raise InvalidCloud("bad_shape", f"expected an (N, 3) array of points, got shape {arr.shape}")
+        raise InvalidCloud('bad_shape', f'expected an (N, 3) array of points, got shape {arr.shape}')
     if not np.issubdtype(arr.dtype, np.number):
-        raise InvalidCloud("bad_shape", f"expected numeric points, got dtype {arr.dtype}")
+        raise InvalidCloud('bad_shape', f'expected numeric points, got dtype {arr.dtype}')
     arr = arr.astype(np.float64, copy=False)
     return arr[np.isfinite(arr).all(axis=1)]
 
@@ -74,14 +88,14 @@ def downsample(points: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray
 def check_geometry(points: np.ndarray, min_points: int) -> None:
     """Refuse clouds no pose can be read from, with a reason the node counts."""
     if len(points) < min_points:
-        raise InvalidCloud("too_few_points", f"{len(points)} finite points, at least {min_points} needed")
+        raise InvalidCloud('too_few_points', f'{len(points)} finite points, at least {min_points} needed')
     unique = np.unique(np.round(points, 9), axis=0)
     if len(unique) < min_points:
-        raise InvalidCloud("too_few_points", f"only {len(unique)} distinct points, at least {min_points} needed")
+        raise InvalidCloud('too_few_points', f'only {len(unique)} distinct points, at least {min_points} needed')
     centred = unique - unique.mean(axis=0)
     sv = np.linalg.svd(centred, compute_uv=False)
     if sv[0] <= 0 or sv[1] / sv[0] < 1e-3:
-        raise InvalidCloud("degenerate", "points are (nearly) all equal or on a line; no pose can be read")
+        raise InvalidCloud('degenerate', 'points are (nearly) all equal or on a line; no pose can be read')
 
 
 def clean(points, max_points: int, min_points: int, seed: int = 0) -> np.ndarray:
@@ -89,13 +103,13 @@ def clean(points, max_points: int, min_points: int, seed: int = 0) -> np.ndarray
     (downsample), and refused with an InvalidCloud saying why when no pose can be read from it."""
     pts = finite_points(points)
     if len(np.asarray(points).reshape(-1, 3)) == 0:
-        raise InvalidCloud("empty", "the cloud has no points")
+        raise InvalidCloud('empty', 'the cloud has no points')
     if len(pts) == 0:
-        raise InvalidCloud("no_finite_points", "the cloud has no finite points")
+        raise InvalidCloud('no_finite_points', 'the cloud has no finite points')
     n_finite = len(pts)
     pts = downsample(pts, max_points, seed)
     if len(pts) < min_points <= n_finite:
-        raise InvalidCloud("too_few_points", f"only {len(pts)} distinct points among {n_finite}, "
-                                             f"at least {min_points} needed")
+        raise InvalidCloud('too_few_points', f'only {len(pts)} distinct points among {n_finite}, '
+                                             f'at least {min_points} needed')
     check_geometry(pts, min_points)
     return pts

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The one object a query returns, shaped after Open3D's RegistrationResult."""
 from __future__ import annotations
 
@@ -22,10 +36,10 @@ class PoseResult:
     score: float = 0.0            # fit after alignment in [0, 1], higher is better
     confidence: float = 0.0       # how likely the answer is right, in [0, 1]
     fitness: float = 0.0          # share of query points near the aligned gallery object
-    inlier_rmse: float = float("inf")  # RMS distance of those points, query units
-    chamfer: float = float("inf")      # symmetric-free one-way chamfer, query -> gallery, normalised units
+    inlier_rmse: float = float('inf')  # RMS distance of those points, query units
+    chamfer: float = float('inf')      # symmetric-free one-way chamfer, query -> gallery, normalised units
     rejected: bool = False
-    reason: str = ""              # why it was rejected; empty when accepted
+    reason: str = ''              # why it was rejected; empty when accepted
     candidates: tuple = ()        # retrieval top-k as ((gallery_id, distance), ...)
     twins: tuple = ()             # gallery objects of the same shape as the answer: no depth camera tells them apart
     timings: dict = field(default_factory=dict)  # seconds per stage, plus "total"
@@ -49,22 +63,22 @@ class PoseResult:
     def to_dict(self) -> dict:
         """Plain JSON-ready form."""
         return {
-            "gallery_id": self.gallery_id,
-            "category": self.category,
-            "rotation": np.asarray(self.rotation).tolist(),
-            "translation": np.asarray(self.translation).tolist(),
-            "quaternion_xyzw": self.quaternion.tolist(),
-            "scale": float(self.scale),
-            "transform": self.transform.tolist(),
-            "score": float(self.score),
-            "confidence": float(self.confidence),
-            "fitness": float(self.fitness),
-            "inlier_rmse": float(self.inlier_rmse),
-            "chamfer": float(self.chamfer),
-            "rejected": bool(self.rejected),
-            "reason": self.reason,
-            "candidates": [[g, float(d)] for g, d in self.candidates],
-            "twins": list(self.twins),
-            "timings": {k: float(v) for k, v in self.timings.items()},
-            "n_points": int(self.n_points),
+            'gallery_id': self.gallery_id,
+            'category': self.category,
+            'rotation': np.asarray(self.rotation).tolist(),
+            'translation': np.asarray(self.translation).tolist(),
+            'quaternion_xyzw': self.quaternion.tolist(),
+            'scale': float(self.scale),
+            'transform': self.transform.tolist(),
+            'score': float(self.score),
+            'confidence': float(self.confidence),
+            'fitness': float(self.fitness),
+            'inlier_rmse': float(self.inlier_rmse),
+            'chamfer': float(self.chamfer),
+            'rejected': bool(self.rejected),
+            'reason': self.reason,
+            'candidates': [[g, float(d)] for g, d in self.candidates],
+            'twins': list(self.twins),
+            'timings': {k: float(v) for k, v in self.timings.items()},
+            'n_points': int(self.n_points),
         }

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """One global vector per cloud from its point features: VLAD over a k-means codebook.
 
 Normalisation, in this order (Arandjelovic & Zisserman, "All about VLAD"): signed square root
@@ -11,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from sklearn.cluster import KMeans
 
-AGGREGATIONS = ("vlad", "max")
+AGGREGATIONS = ('vlad', 'max')
 
 
 def _l2(x: np.ndarray, axis: int = -1) -> np.ndarray:
@@ -19,16 +33,16 @@ def _l2(x: np.ndarray, axis: int = -1) -> np.ndarray:
 
 
 class VLAD:
-    def __init__(self, n_clusters: int = 10, aggregation: str = "vlad", fit_points: int = 100_000,
+    def __init__(self, n_clusters: int = 10, aggregation: str = 'vlad', fit_points: int = 100_000,
                  random_state: int = 0):
         if aggregation not in AGGREGATIONS:
-            raise ValueError(f"aggregation must be one of {AGGREGATIONS}, got {aggregation!r}")
+            raise ValueError(f'aggregation must be one of {AGGREGATIONS}, got {aggregation!r}')
         self.n_clusters = n_clusters
         self.aggregation = aggregation
         self.fit_points = fit_points
         self.random_state = random_state
 
-    def fit(self, features: np.ndarray) -> "VLAD":
+    def fit(self, features: np.ndarray) -> 'VLAD':
         """features: (n, D) point features pooled over the gallery."""
         rng = np.random.default_rng(self.random_state)
         if len(features) > self.fit_points:
@@ -39,7 +53,7 @@ class VLAD:
 
     def transform(self, features: np.ndarray) -> np.ndarray:
         """(k * D,) VLAD vector, or (D,) max-pooled vector, of one cloud's point features."""
-        if self.aggregation == "max":
+        if self.aggregation == 'max':
             return _l2(features.max(axis=0))
         d2 = (features ** 2).sum(1)[:, None] - 2 * features @ self.codebook_.T + (self.codebook_ ** 2).sum(1)[None]
         nearest = np.argmin(d2, axis=1)

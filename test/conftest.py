@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Session-wide fixtures: one small real gallery model, built once for the whole suite."""
 import sys
 from pathlib import Path
@@ -21,17 +35,17 @@ def pytest_collection_modifyitems(items):
             item.add_marker(getattr(pytest.mark, group))
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope='session')
 def small_model(tmp_path_factory):
     """40 training objects each of chair, sofa and airplane from ModelNet40, saved and loaded back."""
     if not MODELNET.exists():
-        pytest.skip("needs ../shared/data/modelnet40")
+        pytest.skip('needs ../shared/data/modelnet40')
     from pcrp_core import PCRP
 
     objects = []
-    for category in ("chair", "sofa", "airplane"):
-        points, names = modelnet(category, "train", 40)
+    for category in ('chair', 'sofa', 'airplane'):
+        points, names = modelnet(category, 'train', 40)
         objects += [SimpleNamespace(gallery_id=n, category=category, points=p) for n, p in zip(names, points)]
-    path = tmp_path_factory.mktemp("model") / "small"
-    PCRP.build(objects, seed=0, sources=["modelnet40 test subset"]).save(path)
+    path = tmp_path_factory.mktemp('model') / 'small'
+    PCRP.build(objects, seed=0, sources=['modelnet40 test subset']).save(path)
     return path

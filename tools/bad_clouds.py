@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """What a segmenter may send: a catalogue of bad (and oddly encoded good) PointCloud2 messages,
 each with what the node is allowed to do with it, and a runner that feeds them to a live node.
 
@@ -17,8 +31,8 @@ import numpy as np
 from pcrp_core.sources.views import random_rotation, sensor_view
 from pcrp_ros.conversions import FLOAT32, xyz_to_pointcloud2
 
-ANSWERED = "answered"        # pose published, with the right gallery ID and a small rotation error
-ANY_ANSWER = "answered_any"  # pose published; no ground truth to hold it to (units unknown to the model)
+ANSWERED = 'answered'        # pose published, with the right gallery ID and a small rotation error
+ANY_ANSWER = 'answered_any'  # pose published; no ground truth to hold it to (units unknown to the model)
 
 
 @dataclass(frozen=True)
@@ -73,7 +87,7 @@ def _organised_with_holes(g, h):
 
 def _big_endian(g, h):
     msg = _msg(g.points, h)
-    data = np.frombuffer(bytes(msg.data), dtype="<f4").astype(">f4").tobytes()
+    data = np.frombuffer(bytes(msg.data), dtype='<f4').astype('>f4').tobytes()
     return _with(msg, is_bigendian=True, data=data)
 
 
@@ -81,12 +95,12 @@ def _reordered_with_extras(g, h):
     # rgb and intensity first, then z, x, y: readers must go by field name and offset, not position
     from sensor_msgs.msg import PointField
     n = len(g.points)
-    rec = np.zeros(n, dtype=[("rgb", "<u4"), ("intensity", "<f4"), ("z", "<f4"), ("x", "<f4"), ("y", "<f4")])
-    rec["x"], rec["y"], rec["z"] = g.points.T
-    rec["intensity"] = 1.0
-    rec["rgb"] = 0xFF8800
+    rec = np.zeros(n, dtype=[('rgb', '<u4'), ('intensity', '<f4'), ('z', '<f4'), ('x', '<f4'), ('y', '<f4')])
+    rec['x'], rec['y'], rec['z'] = g.points.T
+    rec['intensity'] = 1.0
+    rec['rgb'] = 0xFF8800
     msg = _msg(g.points, h)
-    fields = [PointField(name=name, offset=rec.dtype.fields[name][1], datatype=FLOAT32 if name != "rgb" else 7, count=1)
+    fields = [PointField(name=name, offset=rec.dtype.fields[name][1], datatype=FLOAT32 if name != 'rgb' else 7, count=1)
               for name in rec.dtype.names]
     return _with(msg, fields=fields, point_step=rec.itemsize, row_step=rec.itemsize * n, data=rec.tobytes())
 
@@ -120,7 +134,7 @@ def _shape(kind):
     def make(g, h):
         rng = np.random.default_rng(0)
         d = rng.normal(size=(1024, 3))
-        if kind == "sphere":
+        if kind == 'sphere':
             pts = d / np.linalg.norm(d, axis=1, keepdims=True)
         else:
             pts = rng.uniform(-1, 1, size=(1024, 3))
@@ -134,10 +148,10 @@ def _shape(kind):
 def _degenerate(kind):
     def make(g, h):
         c = g.points.mean(0)
-        if kind == "equal":
+        if kind == 'equal':
             return _msg(np.tile(c, (500, 1)), h)
         s = np.linspace(-0.2, 0.2, 500)[:, None]
-        if kind == "line":
+        if kind == 'line':
             return _msg(c + s * [1.0, 0.5, 0.2], h)
         rng = np.random.default_rng(0)
         return _msg(c + rng.uniform(-0.2, 0.2, (500, 1)) * [1, 0, 0] + rng.uniform(-0.2, 0.2, (500, 1)) * [0, 1, 0.3], h)
@@ -145,48 +159,48 @@ def _degenerate(kind):
 
 
 def _rejected(*reasons):
-    return frozenset(f"rejected:{r}" for r in reasons)
+    return frozenset(f'rejected:{r}' for r in reasons)
 
 
 _ANSWER = frozenset({ANSWERED})
-_UNITS = frozenset({ANY_ANSWER, "rejected:low_confidence"})
-_SHAPELESS = frozenset({ANY_ANSWER, "rejected:low_confidence", "rejected:degenerate"})
+_UNITS = frozenset({ANY_ANSWER, 'rejected:low_confidence'})
+_SHAPELESS = frozenset({ANY_ANSWER, 'rejected:low_confidence', 'rejected:degenerate'})
 
 CASES = [
-    Case("empty", "no points (width 0)", lambda g, h: _msg(np.zeros((0, 3)), h), _rejected("empty")),
-    Case("too_few", "5 points, fewer than min_points", lambda g, h: _msg(g.points[:5], h), _rejected("too_few_points")),
-    Case("all_nan", "every coordinate NaN", lambda g, h: _msg(np.full((300, 3), np.nan), h), _rejected("no_finite_points")),
-    Case("all_inf", "every coordinate +-Inf", lambda g, h: _msg(np.full((300, 3), np.inf) * [1, -1, 1], h),
-         _rejected("no_finite_points")),
-    Case("nan_holes", "organised 32-wide, a third NaN holes, is_dense false", _organised_with_holes, _ANSWER),
-    Case("missing_z", "no z field", lambda g, h: _with(_msg(g.points, h), fields=_msg(g.points, h).fields[:2]),
-         _rejected("missing_field")),
-    Case("unknown_datatype", "x of PointField datatype 42", lambda g, h: _bad_datatype(g, h), _rejected("bad_field_type")),
-    Case("float64", "x, y, z as float64", lambda g, h: _msg(g.points, h, dtype=np.float64), _ANSWER),
-    Case("int16_mm", "x, y, z as int16 millimetres", lambda g, h: _integer(g, h, np.int16, 1000.0), _UNITS),
-    Case("uint8", "x, y, z as uint8 (whole units)", lambda g, h: _integer(g, h, np.uint8, 1.0),
-         _rejected("too_few_points", "degenerate")),
-    Case("big_endian", "float32, big-endian data", _big_endian, _ANSWER),
-    Case("extra_fields", "rgb and intensity first, then z, x, y", _reordered_with_extras, _ANSWER),
-    Case("point_step_small", "point_step smaller than the fields need",
-         lambda g, h: _with(_msg(g.points, h), point_step=8), _rejected("bad_layout")),
-    Case("data_short", "data shorter than row_step x height",
-         lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data)[:1000]), _rejected("truncated_data")),
-    Case("data_long", "data 100 bytes longer than row_step x height",
+    Case('empty', 'no points (width 0)', lambda g, h: _msg(np.zeros((0, 3)), h), _rejected('empty')),
+    Case('too_few', '5 points, fewer than min_points', lambda g, h: _msg(g.points[:5], h), _rejected('too_few_points')),
+    Case('all_nan', 'every coordinate NaN', lambda g, h: _msg(np.full((300, 3), np.nan), h), _rejected('no_finite_points')),
+    Case('all_inf', 'every coordinate +-Inf', lambda g, h: _msg(np.full((300, 3), np.inf) * [1, -1, 1], h),
+         _rejected('no_finite_points')),
+    Case('nan_holes', 'organised 32-wide, a third NaN holes, is_dense false', _organised_with_holes, _ANSWER),
+    Case('missing_z', 'no z field', lambda g, h: _with(_msg(g.points, h), fields=_msg(g.points, h).fields[:2]),
+         _rejected('missing_field')),
+    Case('unknown_datatype', 'x of PointField datatype 42', lambda g, h: _bad_datatype(g, h), _rejected('bad_field_type')),
+    Case('float64', 'x, y, z as float64', lambda g, h: _msg(g.points, h, dtype=np.float64), _ANSWER),
+    Case('int16_mm', 'x, y, z as int16 millimetres', lambda g, h: _integer(g, h, np.int16, 1000.0), _UNITS),
+    Case('uint8', 'x, y, z as uint8 (whole units)', lambda g, h: _integer(g, h, np.uint8, 1.0),
+         _rejected('too_few_points', 'degenerate')),
+    Case('big_endian', 'float32, big-endian data', _big_endian, _ANSWER),
+    Case('extra_fields', 'rgb and intensity first, then z, x, y', _reordered_with_extras, _ANSWER),
+    Case('point_step_small', 'point_step smaller than the fields need',
+         lambda g, h: _with(_msg(g.points, h), point_step=8), _rejected('bad_layout')),
+    Case('data_short', 'data shorter than row_step x height',
+         lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data)[:1000]), _rejected('truncated_data')),
+    Case('data_long', 'data 100 bytes longer than row_step x height',
          lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data) + bytes(100)), _ANSWER),
-    Case("row_step_small", "row_step less than width x point_step",
-         lambda g, h: _with(_msg(g.points, h), row_step=12), _rejected("bad_layout")),
-    Case("row_padding", "organised, 8 bytes of padding after each row", _padded_rows, _ANSWER),
-    Case("million_points", "1,000,000 points", _million, _ANSWER),
-    Case("one_km", "the object 1 km from the camera (float64)",
+    Case('row_step_small', 'row_step less than width x point_step',
+         lambda g, h: _with(_msg(g.points, h), row_step=12), _rejected('bad_layout')),
+    Case('row_padding', 'organised, 8 bytes of padding after each row', _padded_rows, _ANSWER),
+    Case('million_points', '1,000,000 points', _million, _ANSWER),
+    Case('one_km', 'the object 1 km from the camera (float64)',
          lambda g, h: _msg(g.points + [0.0, 0.0, 1000.0], h, dtype=np.float64), _ANSWER),
-    Case("millimetres", "float32 millimetres (model in metres)", lambda g, h: _msg(g.points * 1000.0, h), _UNITS),
-    Case("all_equal", "500 copies of one point", _degenerate("equal"), _rejected("too_few_points")),
-    Case("line", "500 points on a line", _degenerate("line"), _rejected("degenerate")),
-    Case("plane", "500 points on a plane", _degenerate("plane"), _SHAPELESS),
-    Case("duplicated", "every point sent twice", _duplicated, _ANSWER),
-    Case("sphere", "a sphere's surface (no preferred orientation)", _shape("sphere"), _SHAPELESS),
-    Case("cube", "a cube's surface (24 equal orientations)", _shape("cube"), _SHAPELESS),
+    Case('millimetres', 'float32 millimetres (model in metres)', lambda g, h: _msg(g.points * 1000.0, h), _UNITS),
+    Case('all_equal', '500 copies of one point', _degenerate('equal'), _rejected('too_few_points')),
+    Case('line', '500 points on a line', _degenerate('line'), _rejected('degenerate')),
+    Case('plane', '500 points on a plane', _degenerate('plane'), _SHAPELESS),
+    Case('duplicated', 'every point sent twice', _duplicated, _ANSWER),
+    Case('sphere', "a sphere's surface (no preferred orientation)", _shape('sphere'), _SHAPELESS),
+    Case('cube', "a cube's surface (24 equal orientations)", _shape('cube'), _SHAPELESS),
 ]
 
 
@@ -203,9 +217,9 @@ class Outcome:
     case: str
     outcome: str             # answered / answered_any / rejected:<reason> / lost
     seconds: float           # from publication to the node's decision
-    gallery_id: str = ""
-    rotation_error: float = float("nan")
-    next_good: str = ""      # what happened to the good cloud sent right after it
+    gallery_id: str = ''
+    rotation_error: float = float('nan')
+    next_good: str = ''      # what happened to the good cloud sent right after it
 
 
 def _rotation_error(q, R_true) -> float:
@@ -219,7 +233,7 @@ class CaseRunner:
     """Publishes cases one at a time to a node in this process and reads its verdict from the
     node's own counters (so a rejection is seen even though it publishes nothing)."""
 
-    def __init__(self, node, client, good: GoodCloud, topic: str = "segmented_object", max_error: float = 10.0):
+    def __init__(self, node, client, good: GoodCloud, topic: str = 'segmented_object', max_error: float = 10.0):
         from geometry_msgs.msg import PoseStamped
         from rclpy.qos import QoSProfile
         from sensor_msgs.msg import PointCloud2
@@ -228,10 +242,10 @@ class CaseRunner:
         self.node, self.good, self.max_error = node, good, max_error
         self.stats = node.stats[topic]
         self.poses, self.ids = [], []
-        client.create_subscription(PoseStamped, f"/{topic}/pose", self.poses.append, 10)
-        client.create_subscription(String, f"/{topic}/gallery_id", self.ids.append, 10)
+        client.create_subscription(PoseStamped, f'/{topic}/pose', self.poses.append, 10)
+        client.create_subscription(String, f'/{topic}/gallery_id', self.ids.append, 10)
         # reliable, so a big cloud is not lost to fragmentation; the node's best-effort input accepts it
-        self.pub = client.create_publisher(PointCloud2, f"/{topic}", QoSProfile(depth=2))
+        self.pub = client.create_publisher(PointCloud2, f'/{topic}', QoSProfile(depth=2))
         self._sec = 1
 
     def ready(self, timeout: float = 60.0) -> bool:
@@ -250,7 +264,7 @@ class CaseRunner:
         """Nothing still queued or in work (a resent cloud may be)."""
         c = self.stats.counts
         while time.monotonic() < deadline:
-            if c["received"] == c["answered"] + c["rejected"] + c["dropped_stale"]:
+            if c['received'] == c['answered'] + c['rejected'] + c['dropped_stale']:
                 time.sleep(0.2)   # the worker counts after publishing: let its last poses arrive
                 return True
             time.sleep(0.05)
@@ -260,7 +274,7 @@ class CaseRunner:
         from builtin_interfaces.msg import Time
         from std_msgs.msg import Header
         self._sec += 1
-        return Header(stamp=Time(sec=self._sec, nanosec=0), frame_id="camera_optical_frame")
+        return Header(stamp=Time(sec=self._sec, nanosec=0), frame_id='camera_optical_frame')
 
     def send(self, make, timeout: float = 60.0) -> Outcome:
         before = dict(self.stats.counts), dict(self.stats.rejections)
@@ -270,25 +284,25 @@ class CaseRunner:
         t0 = time.monotonic()
         self.pub.publish(msg)
         decided = lambda: sum(self.stats.counts[k] - before[0].get(k, 0)  # noqa: E731
-                              for k in ("answered", "rejected", "dropped_stale"))
+                              for k in ('answered', 'rejected', 'dropped_stale'))
         while time.monotonic() - t0 < timeout and not decided():
             time.sleep(0.02)
         seconds = time.monotonic() - t0
         if not decided():
-            return Outcome("", "lost", seconds)
-        if self.stats.counts["answered"] > before[0].get("answered", 0):
+            return Outcome('', 'lost', seconds)
+        if self.stats.counts['answered'] > before[0].get('answered', 0):
             end = time.monotonic() + 5.0
             while len(self.poses) <= n_poses and time.monotonic() < end:
                 time.sleep(0.02)
             pose = next((p for p in self.poses[n_poses:] if p.header.stamp.sec == header.stamp.sec), None)
             while len(self.ids) < len(self.poses) and time.monotonic() < end:
                 time.sleep(0.02)
-            gid = self.ids[-1].data if self.ids else ""
-            err = _rotation_error(pose.pose.orientation, self.good.rotation) if pose is not None else float("nan")
+            gid = self.ids[-1].data if self.ids else ''
+            err = _rotation_error(pose.pose.orientation, self.good.rotation) if pose is not None else float('nan')
             right = gid == self.good.gallery_id and err <= self.max_error
-            return Outcome("", ANSWERED if right else ANY_ANSWER, seconds, gid, err)
+            return Outcome('', ANSWERED if right else ANY_ANSWER, seconds, gid, err)
         reasons = {r for r, v in self.stats.rejections.items() if v > before[1].get(r, 0)}
-        return Outcome("", f"rejected:{min(reasons)}" if reasons else "dropped_stale", seconds)
+        return Outcome('', f'rejected:{min(reasons)}' if reasons else 'dropped_stale', seconds)
 
     def run(self, case: Case) -> Outcome:
         out = self.send(case.make)

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The camera's case in `python -m tools bench`: how fast known objects are answered view by view,
 where the time goes, and how the cost grows with the gallery and with the cloud.
 
@@ -161,7 +175,7 @@ def section(res: dict) -> list[str]:
     """BENCHMARKS.md's part on camera views."""
     b = res['build']
     L = ['## Known objects from a depth camera: YCB views, one thread', '',
-         f"The 78 YCB meshes built as the README says (`pcrp build <ycb> --up-axis z`): "
+         f'The 78 YCB meshes built as the README says (`pcrp build <ycb> --up-axis z`): '
          f"{b['seconds']:.0f} s on every core, {b['bytes'] / 1e6:.1f} MB on disk "
          f"({b['seconds'] / b['objects']:.1f} s and {b['bytes'] / b['objects'] / 1e3:.0f} kB per object). "
          'Views of the robot report\'s test seed; Open3D FPFH + RANSAC + ICP registers each view to the '

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Soak: the node as its own process, fed a mix of good and bad clouds on several topics at a
 steady rate, then held to account: every cloud sent is received, every bad one refused under
 its reason, every good one answered, refused for fit or dropped as stale, memory flat, no
@@ -20,7 +34,7 @@ import numpy as np
 
 from tools.bad_clouds import CASES, GoodCloud, good_cloud
 
-NODE_NAME = "pcrp_soak_node"
+NODE_NAME = 'pcrp_soak_node'
 
 
 def refused_on_arrival():
@@ -30,8 +44,8 @@ def refused_on_arrival():
     for c in CASES:
         if len(c.allowed) == 1:
             (outcome,) = c.allowed
-            if outcome.startswith("rejected:") and outcome != "rejected:low_confidence":
-                out.setdefault(outcome.split(":", 1)[1], c)
+            if outcome.startswith('rejected:') and outcome != 'rejected:low_confidence':
+                out.setdefault(outcome.split(':', 1)[1], c)
     return out
 
 
@@ -41,24 +55,24 @@ class _NodeProcesses:
 
     def __init__(self, topics, k: int, model_path, workers: int = 1):
         self.workers = workers
-        self.dir = Path(tempfile.mkdtemp(prefix="pcrp_soak_"))
-        self.names = [NODE_NAME if k == 1 else f"{NODE_NAME}_{i}" for i in range(k)]
+        self.dir = Path(tempfile.mkdtemp(prefix='pcrp_soak_'))
+        self.names = [NODE_NAME if k == 1 else f'{NODE_NAME}_{i}' for i in range(k)]
         self.share = {name: topics[i::k] for i, name in enumerate(self.names)}
         self.procs = [self._start(name, model_path) for name in self.names]
 
     def _start(self, name, model_path):
-        params = self.dir / f"{name}.yaml"
-        lines = [f"{name}:", "  ros__parameters:", f"    input_topics: [{', '.join(self.share[name])}]",
-                 f"    workers: {self.workers}"]
+        params = self.dir / f'{name}.yaml'
+        lines = [f'{name}:', '  ros__parameters:', f"    input_topics: [{', '.join(self.share[name])}]",
+                 f'    workers: {self.workers}']
         if model_path:
             lines.append(f"    model_path: '{model_path}'")
-        params.write_text("\n".join(lines) + "\n")
-        cmd = [sys.executable, "-m", "pcrp_ros.node", "--ros-args", "-r", f"__node:={name}", "--params-file", str(params)]
-        return subprocess.Popen(cmd, stdout=(self.dir / f"{name}.log").open("w"), stderr=subprocess.STDOUT)
+        params.write_text('\n'.join(lines) + '\n')
+        cmd = [sys.executable, '-m', 'pcrp_ros.node', '--ros-args', '-r', f'__node:={name}', '--params-file', str(params)]
+        return subprocess.Popen(cmd, stdout=(self.dir / f'{name}.log').open('w'), stderr=subprocess.STDOUT)
 
     def diagnostic_names(self) -> dict:
         # statuses are named by the node's full name and the resolved topic
-        return {f"/{name}: /{t}": t for name in self.names for t in self.share[name]}
+        return {f'/{name}: /{t}': t for name in self.names for t in self.share[name]}
 
     def alive(self) -> bool:
         return all(p.poll() is None for p in self.procs)
@@ -83,7 +97,7 @@ class _NodeProcesses:
         return codes
 
     def log(self) -> str:
-        return "".join((self.dir / f"{n}.log").read_text(errors="replace") for n in self.names)
+        return ''.join((self.dir / f'{n}.log').read_text(errors='replace') for n in self.names)
 
 
 class _Diagnostics:
@@ -93,7 +107,7 @@ class _Diagnostics:
         from diagnostic_msgs.msg import DiagnosticArray
         self.values = {}
         self._names = names
-        client.create_subscription(DiagnosticArray, "/diagnostics", self._on, 10)
+        client.create_subscription(DiagnosticArray, '/diagnostics', self._on, 10)
 
     def _on(self, arr):
         for s in arr.status:
@@ -139,16 +153,16 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
              [good_cloud(model, seed=s, gallery_index=int(i))
               for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))])
     bads = refused_on_arrival()
-    topics = [f"pcrp_soak/object_{k}" for k in range(n_topics)]
+    topics = [f'pcrp_soak/object_{k}' for k in range(n_topics)]
     nodes = _NodeProcesses(topics, processes, model_path, workers)
 
     rclpy.init()
-    client = rclpy.create_node("pcrp_soak_driver")
+    client = rclpy.create_node('pcrp_soak_driver')
     diag = _Diagnostics(client, nodes.diagnostic_names())
     poses = Counter()
     for t in topics:
-        client.create_subscription(PoseStamped, f"/{t}/pose", lambda m, t=t: poses.update([t]), 50)
-    pubs = {t: client.create_publisher(PointCloud2, f"/{t}", QoSProfile(depth=10)) for t in topics}
+        client.create_subscription(PoseStamped, f'/{t}/pose', lambda m, t=t: poses.update([t]), 50)
+    pubs = {t: client.create_publisher(PointCloud2, f'/{t}', QoSProfile(depth=10)) for t in topics}
     executor = SingleThreadedExecutor()
     executor.add_node(client)
     spin = threading.Thread(target=executor.spin, daemon=True)
@@ -159,28 +173,28 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
         deadline = time.monotonic() + 60.0
         while time.monotonic() < deadline and not all(p.get_subscription_count() for p in pubs.values()):
             if not nodes.alive():
-                raise RuntimeError(f"a node exited at start-up; see the logs in {nodes.dir}")
+                raise RuntimeError(f'a node exited at start-up; see the logs in {nodes.dir}')
             time.sleep(0.1)
         # the driver sees the match before the node's reader has seen the writer: give discovery
         # a moment, or the first clouds are lost on the way
         time.sleep(2.0)
-        progress(f"soak: {processes} node process(es) up ({workers} worker(s) each); {n_topics} topics at {rate:g} Hz for {duration:g} s, "
-                 f"{bad_share:.0%} bad clouds")
+        progress(f'soak: {processes} node process(es) up ({workers} worker(s) each); {n_topics} topics at {rate:g} Hz for {duration:g} s, '
+                 f'{bad_share:.0%} bad clouds')
         bad_cycle = list(bads.items())
         t0 = next_rss = time.monotonic()
         tick = 0
         while time.monotonic() - t0 < duration:
             for k, t in enumerate(topics):
-                header = Header(stamp=client.get_clock().now().to_msg(), frame_id="camera_optical_frame")
+                header = Header(stamp=client.get_clock().now().to_msg(), frame_id='camera_optical_frame')
                 if rng.random() < bad_share:
                     reason, case = bad_cycle[(tick * n_topics + k) % len(bad_cycle)]
                     pubs[t].publish(case.make(goods[0], header))
-                    sent[t]["bad"] += 1
-                    sent[t][f"bad_{reason}"] += 1
+                    sent[t]['bad'] += 1
+                    sent[t][f'bad_{reason}'] += 1
                 else:
                     g: GoodCloud = goods[(tick + k) % len(goods)]
                     pubs[t].publish(xyz_to_pointcloud2(g.points, header))
-                    sent[t]["good"] += 1
+                    sent[t]['good'] += 1
             tick += 1
             now = time.monotonic()
             if now >= next_rss:
@@ -195,9 +209,9 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
         rss.append((time.monotonic() - t0, nodes.rss_mb()))
         # let the worker finish its last cloud and diagnostics catch up with everything sent
         settle = time.monotonic() + 30.0
-        total = lambda t: sum(diag.get(t, k) for k in ("answered", "rejected", "dropped_stale"))  # noqa: E731
+        total = lambda t: sum(diag.get(t, k) for k in ('answered', 'rejected', 'dropped_stale'))  # noqa: E731
         while time.monotonic() < settle and nodes.alive() and not all(
-                diag.get(t, "received") == sent[t]["good"] + sent[t]["bad"] and total(t) == diag.get(t, "received")
+                diag.get(t, 'received') == sent[t]['good'] + sent[t]['bad'] and total(t) == diag.get(t, 'received')
                 for t in topics):
             time.sleep(0.5)
         time.sleep(1.5)   # one more diagnostics period, so the figures read are final
@@ -214,63 +228,63 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     code = max(codes, key=abs)
     result = _summarise(topics, sent, diag, poses, rss, alive, code, nodes.log(), duration, rate, bad_share,
                         str(nodes.dir))
-    result["processes"] = processes
-    result["workers"] = workers
+    result['processes'] = processes
+    result['workers'] = workers
     return result
 
 
 def _summarise(topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, log_path) -> dict:
     per_topic = {}
-    checks = {"no crash (alive at the end, exit 0 on Ctrl-C, no traceback)": alive and code == 0 and "Traceback" not in log}
+    checks = {'no crash (alive at the end, exit 0 on Ctrl-C, no traceback)': alive and code == 0 and 'Traceback' not in log}
     for t in topics:
-        d = {k: diag.get(t, k) for k in ("received", "answered", "rejected", "dropped_stale", "rejected_low_confidence",
-                                         "latency_p50_ms", "latency_p95_ms", "age_p50_ms", "age_p95_ms")}
+        d = {k: diag.get(t, k) for k in ('received', 'answered', 'rejected', 'dropped_stale', 'rejected_low_confidence',
+                                         'latency_p50_ms', 'latency_p95_ms', 'age_p50_ms', 'age_p95_ms')}
         s = sent[t]
-        bad_counted = all(diag.get(t, f"rejected_{k[4:]}") == v for k, v in s.items() if k.startswith("bad_"))
-        good_accounted = d["answered"] + d["rejected_low_confidence"] + d["dropped_stale"] == s["good"]
-        per_topic[t] = {"sent_good": s["good"], "sent_bad": s["bad"], **d, "poses_seen": poses[t]}
-        checks[f"{t}: every cloud sent was received"] = d["received"] == s["good"] + s["bad"]
-        checks[f"{t}: every bad cloud counted under its reason"] = bad_counted
-        checks[f"{t}: every good cloud answered, refused for fit or dropped stale"] = good_accounted
-        checks[f"{t}: a pose published for every answer"] = poses[t] == d["answered"]
+        bad_counted = all(diag.get(t, f'rejected_{k[4:]}') == v for k, v in s.items() if k.startswith('bad_'))
+        good_accounted = d['answered'] + d['rejected_low_confidence'] + d['dropped_stale'] == s['good']
+        per_topic[t] = {'sent_good': s['good'], 'sent_bad': s['bad'], **d, 'poses_seen': poses[t]}
+        checks[f'{t}: every cloud sent was received'] = d['received'] == s['good'] + s['bad']
+        checks[f'{t}: every bad cloud counted under its reason'] = bad_counted
+        checks[f'{t}: every good cloud answered, refused for fit or dropped stale'] = good_accounted
+        checks[f'{t}: a pose published for every answer'] = poses[t] == d['answered']
     warm = [m for s, m in rss if s >= 0.2 * duration] or [m for _, m in rss]
-    growth = warm[-1] / warm[0] - 1.0 if warm else float("nan")
-    checks["resident memory flat within 10 % after warm-up"] = bool(abs(growth) <= 0.10)
-    return {"duration_s": duration, "rate_hz": rate, "topics": len(topics), "bad_share": bad_share,
-            "per_topic": per_topic, "rss_mb": [(round(s, 1), round(m, 1)) for s, m in rss],
-            "rss_start_mb": rss[0][1] if rss else float("nan"), "rss_warm_mb": warm[0] if warm else float("nan"),
-            "rss_end_mb": rss[-1][1] if rss else float("nan"), "rss_growth_after_warmup": growth,
-            "exit_code": code, "node_log": log_path, "checks": checks, "passed": all(checks.values())}
+    growth = warm[-1] / warm[0] - 1.0 if warm else float('nan')
+    checks['resident memory flat within 10 % after warm-up'] = bool(abs(growth) <= 0.10)
+    return {'duration_s': duration, 'rate_hz': rate, 'topics': len(topics), 'bad_share': bad_share,
+            'per_topic': per_topic, 'rss_mb': [(round(s, 1), round(m, 1)) for s, m in rss],
+            'rss_start_mb': rss[0][1] if rss else float('nan'), 'rss_warm_mb': warm[0] if warm else float('nan'),
+            'rss_end_mb': rss[-1][1] if rss else float('nan'), 'rss_growth_after_warmup': growth,
+            'exit_code': code, 'node_log': log_path, 'checks': checks, 'passed': all(checks.values())}
 
 
 def table(result: dict) -> str:
-    rows = ["| topic | good sent | bad sent | received | answered | refused (fit) | refused (bad input) | dropped stale "
-            "| latency p50 / p95 ms | age p50 / p95 ms |", "|---|---|---|---|---|---|---|---|---|---|"]
-    for t, d in result["per_topic"].items():
-        bad = d["rejected"] - d["rejected_low_confidence"]
+    rows = ['| topic | good sent | bad sent | received | answered | refused (fit) | refused (bad input) | dropped stale '
+            '| latency p50 / p95 ms | age p50 / p95 ms |', '|---|---|---|---|---|---|---|---|---|---|']
+    for t, d in result['per_topic'].items():
+        bad = d['rejected'] - d['rejected_low_confidence']
         rows.append(f"| {t} | {d['sent_good']} | {d['sent_bad']} | {d['received']:.0f} | {d['answered']:.0f} "
                     f"| {d['rejected_low_confidence']:.0f} | {bad:.0f} | {d['dropped_stale']:.0f} "
                     f"| {d['latency_p50_ms']:.0f} / {d['latency_p95_ms']:.0f} | {d['age_p50_ms']:.0f} / {d['age_p95_ms']:.0f} |")
-    rows.append("")
-    who = "the node" if result.get("processes", 1) == 1 else f"the {result['processes']} node processes together"
+    rows.append('')
+    who = 'the node' if result.get('processes', 1) == 1 else f"the {result['processes']} node processes together"
     rows.append(f"Resident memory of {who}: {result['rss_start_mb']:.0f} MB at start, {result['rss_warm_mb']:.0f} MB "
                 f"after warm-up (20 % of the run), {result['rss_end_mb']:.0f} MB at the end "
                 f"({100 * result['rss_growth_after_warmup']:+.1f} % after warm-up). Exit code on Ctrl-C: {result['exit_code']}.")
-    rows.append("")
-    rows += [f"- {'pass' if ok else 'FAIL'}: {name}" for name, ok in result["checks"].items()]
-    return "\n".join(rows)
+    rows.append('')
+    rows += [f"- {'pass' if ok else 'FAIL'}: {name}" for name, ok in result['checks'].items()]
+    return '\n'.join(rows)
 
 
 def register(sub) -> None:
-    p = sub.add_parser("soak", help="run the node for a while on good and bad clouds and check it held up")
-    p.add_argument("--duration", type=float, default=600.0, help="seconds of publishing")
-    p.add_argument("--rate", type=float, default=10.0, help="clouds per second on each topic")
-    p.add_argument("--topics", type=int, default=4)
-    p.add_argument("--bad-share", type=float, default=0.2)
-    p.add_argument("--processes", type=int, default=1, help="node processes sharing the topics")
-    p.add_argument("--workers", type=int, default=1, help="the node's workers parameter")
-    p.add_argument("--model", default=None)
-    p.add_argument("--json", default=None, help="also write the figures to this JSON file")
+    p = sub.add_parser('soak', help='run the node for a while on good and bad clouds and check it held up')
+    p.add_argument('--duration', type=float, default=600.0, help='seconds of publishing')
+    p.add_argument('--rate', type=float, default=10.0, help='clouds per second on each topic')
+    p.add_argument('--topics', type=int, default=4)
+    p.add_argument('--bad-share', type=float, default=0.2)
+    p.add_argument('--processes', type=int, default=1, help='node processes sharing the topics')
+    p.add_argument('--workers', type=int, default=1, help="the node's workers parameter")
+    p.add_argument('--model', default=None)
+    p.add_argument('--json', default=None, help='also write the figures to this JSON file')
     p.set_defaults(func=_soak)
 
 
@@ -281,5 +295,5 @@ def _soak(args) -> int:
     print(table(result))
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=1))
-    return 0 if result["passed"] else 1
+    return 0 if result['passed'] else 1
 

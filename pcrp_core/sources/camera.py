@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """A depth camera looking at meshes: what it measures, by ray casting (Open3D RaycastingScene).
 
 Coordinates are the camera's optical frame (x right, y down, z forward, metres), the frame a
@@ -67,13 +81,13 @@ class Mesh:
     triangles: np.ndarray
 
     @classmethod
-    def read(cls, path) -> "Mesh":
+    def read(cls, path) -> 'Mesh':
         import open3d as o3d
 
         m = o3d.io.read_triangle_mesh(str(path))
         return cls(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.triangles, dtype=np.int64))
 
-    def moved(self, R: np.ndarray, t: np.ndarray) -> "Mesh":
+    def moved(self, R: np.ndarray, t: np.ndarray) -> 'Mesh':
         return Mesh(self.vertices @ np.asarray(R).T + np.asarray(t), self.triangles)
 
     @property
@@ -173,8 +187,8 @@ def render_depth(meshes: list[Mesh], camera: PinholeCamera) -> tuple[np.ndarray,
     dirs = np.stack([(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], axis=-1)
     rays = np.concatenate([np.zeros_like(dirs), dirs], axis=-1).astype(np.float32)
     hit = scene.cast_rays(o3d.core.Tensor(rays))
-    t = hit["t_hit"].numpy()
-    gid = hit["geometry_ids"].numpy().astype(np.int64)
+    t = hit['t_hit'].numpy()
+    gid = hit['geometry_ids'].numpy().astype(np.int64)
     lookup = np.full(max(ids) + 2, -1, np.int32)
     lookup[np.asarray(ids)] = np.arange(len(ids))
     found = np.isfinite(t)

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The user's own objects: a folder of meshes or clouds, one object per file, or of sub-folders,
 one per category.
 
@@ -16,9 +30,9 @@ import open3d as o3d
 from pcrp_core.sources.camera import Mesh
 from pcrp_core.sources.gallery_object import GalleryObject
 
-MESH_SUFFIXES = {".obj", ".stl", ".off", ".ply", ".gltf", ".glb"}
-CLOUD_SUFFIXES = {".ply", ".pcd", ".xyz", ".xyzn", ".pts", ".npy"}
-log = logging.getLogger("pcrp.sources")
+MESH_SUFFIXES = {'.obj', '.stl', '.off', '.ply', '.gltf', '.glb'}
+CLOUD_SUFFIXES = {'.ply', '.pcd', '.xyz', '.xyzn', '.pts', '.npy'}
+log = logging.getLogger('pcrp.sources')
 
 
 def read_points(path, n_points: int | None = None, seed: int = 0) -> np.ndarray:
@@ -26,13 +40,13 @@ def read_points(path, n_points: int | None = None, seed: int = 0) -> np.ndarray:
     path = Path(path)
     suffix = path.suffix.lower()
     if not path.is_file():
-        raise ValueError("no such file")
+        raise ValueError('no such file')
     if suffix not in MESH_SUFFIXES | CLOUD_SUFFIXES:
-        raise ValueError(f"unsupported file type {suffix!r}")
-    if suffix == ".npy":
+        raise ValueError(f'unsupported file type {suffix!r}')
+    if suffix == '.npy':
         arr = np.load(path, allow_pickle=False)
         if arr.ndim != 2 or arr.shape[1] < 3:
-            raise ValueError(f"expected an (N, 3) array, got shape {arr.shape}")
+            raise ValueError(f'expected an (N, 3) array, got shape {arr.shape}')
         return arr[:, :3].astype(np.float64)
     if suffix in MESH_SUFFIXES:
         mesh = o3d.io.read_triangle_mesh(str(path))
@@ -40,11 +54,11 @@ def read_points(path, n_points: int | None = None, seed: int = 0) -> np.ndarray:
             o3d.utility.random.seed(seed)
             return np.asarray(mesh.sample_points_uniformly(n_points or 2048).points)
         if suffix not in CLOUD_SUFFIXES:
-            raise ValueError("mesh has no triangles")
+            raise ValueError('mesh has no triangles')
     pcd = o3d.io.read_point_cloud(str(path))
     pts = np.asarray(pcd.points)
     if len(pts) == 0:
-        raise ValueError("no points could be read")
+        raise ValueError('no points could be read')
     return pts
 
 
@@ -77,13 +91,13 @@ def load_folder(root, n_points: int = 1024, seed: int = 0, limit: int | None = N
             try:
                 pts, mesh = read_object(f, n_points, seed)
             except (ValueError, OSError, RuntimeError) as e:
-                log.warning("skipping %s: %s", f, e)
+                log.warning('skipping %s: %s', f, e)
                 continue
             if mesh is None and len(pts) > n_points:
                 pts = pts[np.random.default_rng(seed).choice(len(pts), n_points, replace=False)]
-            gallery_id = f.stem if category is None else f"{category}/{f.stem}"
+            gallery_id = f.stem if category is None else f'{category}/{f.stem}'
             objects.append(GalleryObject(gallery_id, category or f.stem, pts.astype(np.float32), mesh=mesh))
     if not objects:
-        raise ValueError(f"{root}: nothing usable found (expected mesh or cloud files, one object each, or "
-                         f"sub-folders of them, one per category)")
+        raise ValueError(f'{root}: nothing usable found (expected mesh or cloud files, one object each, or '
+                         f'sub-folders of them, one per category)')
     return objects

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The embedded default data: procedural airplanes, chairs, sofas and cars.
 
 Objects follow ModelNet40's conventions so that a model built on one makes sense on the
@@ -17,7 +31,7 @@ import numpy as np
 from pcrp_core.sources.gallery_object import GalleryObject
 from pcrp_core.sources.primitives import ROT_X, ROT_Z, Box, Cylinder, Ellipsoid, sample_parts
 
-CATEGORIES = ("airplane", "chair", "sofa", "car")
+CATEGORIES = ('airplane', 'chair', 'sofa', 'car')
 TEST_SEED_OFFSET = 100_000
 _AXIS_X = np.array([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], float)   # local z -> x
 _AXIS_Y = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)   # local z -> y
@@ -72,11 +86,11 @@ def _car(r):
     L, W = r.uniform(1.7, 2.2), r.uniform(0.75, 0.9)
     body_h, clear, wheel_r = r.uniform(0.25, 0.4), r.uniform(0.08, 0.15), r.uniform(0.13, 0.2)
     parts = [Box([0, 0, clear + body_h / 2], [W, L, body_h])]
-    style = r.choice(["sedan", "hatch", "suv", "pickup"])
-    cab_h = r.uniform(0.22, 0.35) * (1.3 if style == "suv" else 1.0)
-    if style == "sedan":
+    style = r.choice(['sedan', 'hatch', 'suv', 'pickup'])
+    cab_h = r.uniform(0.22, 0.35) * (1.3 if style == 'suv' else 1.0)
+    if style == 'sedan':
         cab_len, cab_y = L * r.uniform(0.4, 0.5), r.uniform(0.0, 0.1) * L
-    elif style == "pickup":
+    elif style == 'pickup':
         cab_len, cab_y = L * r.uniform(0.25, 0.35), -L * r.uniform(0.02, 0.12)
         bed_y0, bed_y1 = cab_y + cab_len / 2, L / 2
         for s in (-1, 1):
@@ -115,7 +129,7 @@ def _airplane(r):
     return parts
 
 
-_BUILDERS = {"airplane": _airplane, "chair": _chair, "sofa": _sofa, "car": _car}
+_BUILDERS = {'airplane': _airplane, 'chair': _chair, 'sofa': _sofa, 'car': _car}
 
 
 def generate_object(category: str, seed: int, n_points: int = 1024) -> np.ndarray:
@@ -128,12 +142,12 @@ def generate_object(category: str, seed: int, n_points: int = 1024) -> np.ndarra
     return (pts / np.linalg.norm(pts, axis=1).max()).astype(np.float32)
 
 
-def generate_gallery(n_per_category: int, seed: int = 0, n_points: int = 1024, split: str = "train",
+def generate_gallery(n_per_category: int, seed: int = 0, n_points: int = 1024, split: str = 'train',
                      categories=CATEGORIES):
-    offset = TEST_SEED_OFFSET if split == "test" else 0
+    offset = TEST_SEED_OFFSET if split == 'test' else 0
     objects = []
     for c in categories:
         for k in range(n_per_category):
-            gid = f"proc_{c}_t{k:03d}" if split == "test" else f"proc_{c}_{k:04d}"
-            objects.append(GalleryObject(gid, c, generate_object(c, seed * 10_000 + offset + k, n_points), up="z"))
+            gid = f'proc_{c}_t{k:03d}' if split == 'test' else f'proc_{c}_{k:04d}'
+            objects.append(GalleryObject(gid, c, generate_object(c, seed * 10_000 + offset + k, n_points), up='z'))
     return objects

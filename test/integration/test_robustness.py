@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Whatever a segmenter sends: the core answers or refuses with a reason, never crashes.
 (The node's side of it is in test_node_robustness.py.)"""
 import time
@@ -11,7 +25,7 @@ from pcrp_core import InvalidCloud, PCRP
 from pcrp_core.sources.procedural import generate_object
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def model():
     return PCRP.load(PROCEDURAL_MODEL)
 
@@ -20,16 +34,16 @@ def _answer_or_reason(model, cloud):
     try:
         return model.estimate(cloud)
     except InvalidCloud as e:
-        assert e.reason in {"empty", "no_finite_points", "too_few_points", "degenerate", "bad_shape"}
+        assert e.reason in {'empty', 'no_finite_points', 'too_few_points', 'degenerate', 'bad_shape'}
         return e.reason
 
 
-@pytest.mark.parametrize("name, cloud", [
-    ("plane", np.column_stack([np.random.default_rng(0).uniform(-1, 1, (800, 2)), np.zeros(800)])),
-    ("sphere", (lambda v: v / np.linalg.norm(v, axis=1, keepdims=True))(np.random.default_rng(1).normal(size=(800, 3)))),
-    ("cube", np.random.default_rng(2).uniform(-1, 1, (800, 3)).round(0) * 0.5 + np.random.default_rng(3).uniform(-0.5, 0.5, (800, 3)) * [1, 1, 0]),
-    ("duplicated points", np.repeat(generate_object("chair", 1)[:100].astype(float), 10, axis=0)),
-    ("two points repeated", np.repeat([[0.0, 0, 0], [1, 1, 1]], 400, axis=0)),
+@pytest.mark.parametrize('name, cloud', [
+    ('plane', np.column_stack([np.random.default_rng(0).uniform(-1, 1, (800, 2)), np.zeros(800)])),
+    ('sphere', (lambda v: v / np.linalg.norm(v, axis=1, keepdims=True))(np.random.default_rng(1).normal(size=(800, 3)))),
+    ('cube', np.random.default_rng(2).uniform(-1, 1, (800, 3)).round(0) * 0.5 + np.random.default_rng(3).uniform(-0.5, 0.5, (800, 3)) * [1, 1, 0]),
+    ('duplicated points', np.repeat(generate_object('chair', 1)[:100].astype(float), 10, axis=0)),
+    ('two points repeated', np.repeat([[0.0, 0, 0], [1, 1, 1]], 400, axis=0)),
 ])
 def test_degenerate_geometry_is_answered_or_refused(model, name, cloud):
     out = _answer_or_reason(model, cloud)
@@ -38,31 +52,31 @@ def test_degenerate_geometry_is_answered_or_refused(model, name, cloud):
 
 def test_a_million_points_are_downsampled_and_answered_in_bounded_time(model):
     rng = np.random.default_rng(4)
-    base = generate_object("sofa", 2, n_points=4096).astype(np.float64)
+    base = generate_object('sofa', 2, n_points=4096).astype(np.float64)
     big = base[rng.integers(0, len(base), 1_000_000)] + rng.normal(scale=0.002, size=(1_000_000, 3))
     t0 = time.perf_counter()
     r = model.estimate(big)
     assert time.perf_counter() - t0 < 20.0
-    assert r.n_points == model.options.max_points and r.category == "sofa"
+    assert r.n_points == model.options.max_points and r.category == 'sofa'
 
 
 def test_far_from_the_origin_the_pose_is_still_right(model):
-    p = model.gallery_cloud("proc_chair_0003").astype(np.float64)
+    p = model.gallery_cloud('proc_chair_0003').astype(np.float64)
     t = np.array([1000.0, -250.0, 30.0])
     r = model.estimate(p + t)
-    assert r.gallery_id == "proc_chair_0003" and rotation_error_deg(r.rotation, np.eye(3)) < 1.0
+    assert r.gallery_id == 'proc_chair_0003' and rotation_error_deg(r.rotation, np.eye(3)) < 1.0
     np.testing.assert_allclose(r.translation, t, atol=0.01)
 
 
 def test_a_cloud_in_millimetres_is_answered_or_rejected_not_crashed(model):
-    out = _answer_or_reason(model, model.gallery_cloud("proc_car_0001").astype(np.float64) * 1000.0)
+    out = _answer_or_reason(model, model.gallery_cloud('proc_car_0001').astype(np.float64) * 1000.0)
     assert isinstance(out, str) or np.isfinite(out.transform).all()
-    model.set_params(scale_mode="normalize")
+    model.set_params(scale_mode='normalize')
     try:
-        r = model.estimate(model.gallery_cloud("proc_car_0001").astype(np.float64) * 1000.0)
+        r = model.estimate(model.gallery_cloud('proc_car_0001').astype(np.float64) * 1000.0)
     finally:
-        model.set_params(scale_mode="metric")
-    assert r.gallery_id == "proc_car_0001" and r.scale == pytest.approx(1000.0, rel=0.01)
+        model.set_params(scale_mode='metric')
+    assert r.gallery_id == 'proc_car_0001' and r.scale == pytest.approx(1000.0, rel=0.01)
 
 
 @settings(max_examples=8, deadline=None)
@@ -70,8 +84,8 @@ def test_a_cloud_in_millimetres_is_answered_or_rejected_not_crashed(model):
 def test_any_rotation_and_translation_of_a_gallery_object_gives_its_pose(model, rotvec, shift):
     from scipy.spatial.transform import Rotation
     R = Rotation.from_rotvec(rotvec).as_matrix()
-    p = model.gallery_cloud("proc_airplane_0004").astype(np.float64)
+    p = model.gallery_cloud('proc_airplane_0004').astype(np.float64)
     r = model.estimate(p @ R.T + shift)
-    assert r.gallery_id == "proc_airplane_0004"
+    assert r.gallery_id == 'proc_airplane_0004'
     assert rotation_error_deg(r.rotation, R) < 1.0
     np.testing.assert_allclose(r.translation, shift, atol=0.01)

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """VLAD and max pooling: shapes, normalisation, order invariance."""
 import numpy as np
 import pytest
@@ -6,7 +20,7 @@ from pcrp_core.gallery import Gallery
 from pcrp_core.vlad import VLAD
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def data():
     rng = np.random.default_rng(0)
     centres = rng.normal(scale=5, size=(4, 6))
@@ -33,14 +47,14 @@ def test_vlad_ignores_point_order_and_tells_different_sets_apart(data):
 
 def test_max_pooling_is_the_normalised_channel_maximum(data):
     feats, _ = data
-    v = VLAD(aggregation="max").transform(feats)
+    v = VLAD(aggregation='max').transform(feats)
     np.testing.assert_allclose(v, feats.max(0) / np.linalg.norm(feats.max(0)), rtol=1e-5)
 
 
 def test_gallery_search_returns_nearest_first_with_distances():
     rng = np.random.default_rng(1)
     vecs = rng.normal(size=(50, 8)).astype(np.float32)
-    g = Gallery([f"o{i}" for i in range(50)], ["c"] * 50, [np.zeros((3, 3))] * 50, vecs)
+    g = Gallery([f'o{i}' for i in range(50)], ['c'] * 50, [np.zeros((3, 3))] * 50, vecs)
     idx, dist = g.search(vecs[17] + 1e-3, 5)
     assert idx[0] == 17
     assert np.all(np.diff(dist) >= 0)

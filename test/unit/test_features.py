@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The feature stages on their own: invariance, reconstruction, determinism."""
 import numpy as np
 import pytest
@@ -9,12 +23,12 @@ from pcrp_core.features.neighbours import knn
 from pcrp_core.features.saab import ChannelwiseSaab, Saab
 from pcrp_core.preprocess import farthest_point_sampling
 
-pytestmark = pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")
+pytestmark = pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def clouds():
-    return list(modelnet("chair", count=12)[0]) + list(modelnet("airplane", count=12)[0])
+    return list(modelnet('chair', count=12)[0]) + list(modelnet('airplane', count=12)[0])
 
 
 def test_saab_keeping_every_kernel_reconstructs_exactly():
@@ -69,7 +83,7 @@ def test_local_frames_are_proper_rotations_that_rotate_with_the_cloud(clouds):
     assert agree.mean() > 0.97
 
 
-@pytest.mark.parametrize("hop1", ["fpfh", "octant"])
+@pytest.mark.parametrize('hop1', ['fpfh', 'octant'])
 def test_point_features_are_rotation_invariant(clouds, hop1):
     ph = PointHop(hop1=hop1).fit(clouds[2:])
     assert 100 <= ph.n_features_ <= 300
