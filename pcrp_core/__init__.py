@@ -12,7 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""pcrp_core: PCRP object retrieval and pose estimation on plain numpy arrays. No ROS here.
+"""
+pcrp_core: PCRP object retrieval and pose estimation on plain numpy arrays.
+
+No ROS here.
 
 The names below are imported on first use, so `import pcrp_core` (and `pcrp --help`) does not
 pay for Open3D and scikit-learn until a model is built or loaded.

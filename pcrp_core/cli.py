@@ -12,7 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""`pcrp` command line: build | query | eval (core); make-bag | replay | process | demo are added by pcrp_ros.
+"""
+The `pcrp` command line: build | query | eval (core).
+
+make-bag | replay | process | demo are added by pcrp_ros.
 
 Each subcommand lives in a `register(subparsers)` function that adds its parser and sets
 `func` to a handler taking the parsed args and returning an exit code. Heavy imports stay
@@ -217,7 +220,11 @@ def _eval(args) -> int:
 
 
 def parse_up(text, option: str = '--up'):
-    """An option's X,Y,Z as three floats (None when not given); ValueError saying what is expected."""
+    """
+    Read an option's X,Y,Z as three floats (None when not given).
+
+    A ValueError says what is expected.
+    """
     if text is None:
         return None
     try:
@@ -255,7 +262,7 @@ def build_parser(extensions=()) -> argparse.ArgumentParser:
 
 
 def join_signed_values(argv: list[str]) -> list[str]:
-    """argv with "--up -1,0,0" and "--up-axis -y" joined into "--up=-1,0,0" and "--up-axis=-y"."""
+    """Join "--up -1,0,0" and "--up-axis -y" in argv into "--up=-1,0,0" and "--up-axis=-y"."""
     out: list[str] = []
     for arg in argv:
         if out and out[-1] in SIGNED_OPTIONS and _SIGNED_VALUE.fullmatch(arg):

@@ -12,8 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""A confidence that means what it says: the probability, learnt on validation answers, that an
-answer is right.
+"""
+A confidence that means what it says: the learnt probability that an answer is right.
 
 What an answer reports about itself (how well the posed object fits, how much better than the
 best other object, how many points it had) is turned into a probability by logistic regression
@@ -32,6 +32,7 @@ import numpy as np
 @dataclass(frozen=True)
 class Calibration:
     """p(right | features) = sigmoid(coef . (x - mean) / scale + intercept)."""
+
     names: tuple
     mean: np.ndarray
     scale: np.ndarray

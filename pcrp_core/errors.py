@@ -16,7 +16,8 @@
 
 
 class InvalidCloud(ValueError):
-    """The input cannot be answered (too few finite points, degenerate geometry...).
+    """
+    The input cannot be answered (too few finite points, degenerate geometry...).
 
     ``reason`` is a short stable key (``"too_few_points"``, ``"non_finite"``,
     ``"degenerate"``) that the node counts rejections under.

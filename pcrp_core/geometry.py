@@ -21,21 +21,25 @@ AXES = {'x': (1.0, 0.0, 0.0), 'y': (0.0, 1.0, 0.0), 'z': (0.0, 0.0, 1.0)}
 
 
 def rotation_angle_deg(R_a, R_b) -> float:
-    """The geodesic angle between two rotations, in degrees."""
+    """Return the geodesic angle between two rotations, in degrees."""
     c = (np.trace(np.asarray(R_a).T @ np.asarray(R_b)) - 1.0) / 2.0
     return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
 
 
 def angle_deg(a, b) -> float:
-    """The angle between two vectors, in degrees."""
+    """Return the angle between two vectors, in degrees."""
     a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
     c = a @ b / (np.linalg.norm(a) * np.linalg.norm(b))
     return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
 
 
 def rotation_taking(a, b) -> np.ndarray:
-    """The least rotation taking direction a onto direction b (any lengths). Written out: scipy's
-    Rotation.align_vectors of one pair of vectors gives other answers before scipy 1.12."""
+    """
+    Return the least rotation taking direction a onto direction b (any lengths).
+
+    Written out: scipy's Rotation.align_vectors of one pair of vectors gives other answers before
+    scipy 1.12.
+    """
     a = np.asarray(a, dtype=np.float64) / np.linalg.norm(a)
     b = np.asarray(b, dtype=np.float64) / np.linalg.norm(b)
     v, c = np.cross(a, b), float(a @ b)
@@ -48,8 +52,12 @@ def rotation_taking(a, b) -> np.ndarray:
 
 
 def normalised(points: np.ndarray, unit: float, centre=None) -> np.ndarray:
-    """points in a model's normalised units: centred on their centroid (or centre), divided by
-    the model-wide unit, so the features' radii mean the same for every object."""
+    """
+    Return points in a model's normalised units.
+
+    They are centred on their centroid (or centre) and divided by the model-wide unit, so the
+    features' radii mean the same for every object.
+    """
     points = np.asarray(points, dtype=np.float64)
     return (points - (points.mean(axis=0) if centre is None else centre)) / unit
 
@@ -60,14 +68,14 @@ def rms_radius(points: np.ndarray) -> float:
 
 
 def unit_vector(v) -> np.ndarray | None:
-    """v scaled to length 1, None unless it is a finite, non-zero 3-vector."""
+    """Return v scaled to length 1, None unless it is a finite, non-zero 3-vector."""
     v = np.asarray(v, dtype=np.float64).reshape(-1)
     n = float(np.linalg.norm(v)) if v.shape == (3,) and np.all(np.isfinite(v)) else 0.0
     return v / n if n >= 1e-9 else None
 
 
 def unit_axis(axis) -> np.ndarray:
-    """A unit vector from 'x', '-z', ... or three numbers; ValueError otherwise."""
+    """Return a unit vector from 'x', '-z', ... or three numbers; ValueError otherwise."""
     if isinstance(axis, str):
         name = axis.strip().lower()
         sign = -1.0 if name.startswith('-') else 1.0

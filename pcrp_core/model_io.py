@@ -12,7 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Model directory format: `model.json` (metadata) + `arrays.npz` (numbers). Never pickle.
+"""
+Model directory format: `model.json` (metadata) + `arrays.npz` (numbers).
+
+Never pickle.
 
 `model.json` holds the format version, hyperparameters, gallery IDs and categories and what the
 model was built from, plus the SHA-256 of `arrays.npz`, so a truncated or altered array file

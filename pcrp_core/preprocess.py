@@ -34,7 +34,8 @@ def finite_points(points) -> np.ndarray:
 
 
 def farthest_point_sampling(points: np.ndarray, m: int) -> np.ndarray:
-    """Indices of m points spread over the cloud.
+    """
+    Return the indices of m points spread over the cloud.
 
     Starts from the point farthest from the centroid so the choice, and with it every
     feature built on the sampled set, does not depend on the cloud's pose or point order.
@@ -52,7 +53,8 @@ def farthest_point_sampling(points: np.ndarray, m: int) -> np.ndarray:
 
 
 def merge_duplicates(points: np.ndarray, resolution: float = 0.005) -> np.ndarray:
-    """One point per cell of `resolution` times the cloud's RMS radius, first come first kept.
+    """
+    One point per cell of `resolution` times the cloud's RMS radius, first come first kept.
 
     Repeated points (merged cameras, drivers that pad clouds) bias the normals and features,
     and sampling then picks copies instead of surface. The cell is relative to the cloud's
@@ -69,7 +71,8 @@ def merge_duplicates(points: np.ndarray, resolution: float = 0.005) -> np.ndarra
 
 
 def downsample(points: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
-    """At most max_points points, duplicates merged.
+    """
+    At most max_points points, duplicates merged.
 
     A random subset first bounds the cost of huge clouds; farthest-point sampling then keeps
     coverage even, so dense regions near a camera do not dominate the features. Three times
@@ -99,8 +102,12 @@ def check_geometry(points: np.ndarray, min_points: int) -> None:
 
 
 def clean(points, max_points: int, min_points: int, seed: int = 0) -> np.ndarray:
-    """A segmenter's cloud as the pipeline uses it: finite, duplicates merged, at most max_points
-    (downsample), and refused with an InvalidCloud saying why when no pose can be read from it."""
+    """
+    Clean a segmenter's cloud for the pipeline: finite, duplicates merged, at most max_points.
+
+    At most max_points by downsample; refused with an InvalidCloud saying why when no pose can be
+    read from it.
+    """
     pts = finite_points(points)
     if len(np.asarray(points).reshape(-1, 3)) == 0:
         raise InvalidCloud('empty', 'the cloud has no points')

@@ -22,7 +22,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class PoseResult:
-    """Which gallery object a cloud is, and where it is.
+    """
+    Which gallery object a cloud is, and where it is.
 
     The pose maps the gallery object's canonical frame into the query's frame:
     ``p_query = scale * rotation @ p_gallery + translation``.

@@ -19,8 +19,12 @@ import time
 
 
 class Clock:
-    """lap(name) adds the seconds since the previous lap to timings[name]; without a dict it
-    only keeps time, so library code can always call it."""
+    """
+    Per-stage timings: Clock(timings).lap(name) adds the seconds since the previous lap.
+
+    They go to timings[name]; without a dict it only keeps time, so library code can always call
+    it.
+    """
 
     def __init__(self, timings: dict | None):
         self.timings = timings

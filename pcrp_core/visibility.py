@@ -27,7 +27,7 @@ FAR_DIAMETERS = 20.0
 
 
 def visible_from(points: np.ndarray, camera: np.ndarray) -> np.ndarray:
-    """Indices of the points visible from `camera`."""
+    """Return the indices of the points visible from `camera`."""
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     diameter = np.linalg.norm(points.max(0) - points.min(0))
     camera = np.asarray(camera, dtype=np.float64)
@@ -40,8 +40,11 @@ def visible_from(points: np.ndarray, camera: np.ndarray) -> np.ndarray:
 
 
 def sphere_directions(n: int) -> np.ndarray:
-    """n unit vectors spread evenly over the sphere (Fibonacci lattice): where to put sensors
-    around an object, or where one may have stood."""
+    """
+    Return n unit vectors spread evenly over the sphere (Fibonacci lattice).
+
+    Where to put sensors around an object, or where one may have stood.
+    """
     k = np.arange(n) + 0.5
     z = 1 - 2 * k / n
     phi = np.pi * (1 + 5 ** 0.5) * k

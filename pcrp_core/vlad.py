@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""One global vector per cloud from its point features: VLAD over a k-means codebook.
+"""
+One global vector per cloud from its point features: VLAD over a k-means codebook.
 
 Normalisation, in this order (Arandjelovic & Zisserman, "All about VLAD"): signed square root
 of each entry (tames codewords that collect many points), L2 per codeword block

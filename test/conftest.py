@@ -27,8 +27,11 @@ GROUPS = ('unit', 'integration', 'ros', 'tools')
 
 
 def pytest_collection_modifyitems(items):
-    """Mark each test with its group, the folder it lives in, so `-m unit` or `-m "not ros"`
-    selects by what a test needs rather than by file names."""
+    """
+    Mark each test with its group, the folder it lives in.
+
+    So `-m unit` or `-m "not ros"` selects by what a test needs rather than by file names.
+    """
     for item in items:
         group = Path(str(item.fspath)).parent.name
         if group in GROUPS:
@@ -37,7 +40,11 @@ def pytest_collection_modifyitems(items):
 
 @pytest.fixture(scope='session')
 def small_model(tmp_path_factory):
-    """40 training objects each of chair, sofa and airplane from ModelNet40, saved and loaded back."""
+    """
+    Build a model of 40 ModelNet40 training objects each of chair, sofa and airplane.
+
+    The model is saved; the tests load it back from the path returned.
+    """
     if not MODELNET.exists():
         pytest.skip('needs ../shared/data/modelnet40')
     from pcrp_core import PCRP

@@ -12,7 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The harness beside the package: experiments, benchmarks and fault batteries. Not installed.
+"""
+The harness beside the package: experiments, benchmarks and fault batteries.
+
+Not installed.
 
 Run from a checkout: `python -m tools <command>` (see `python -m tools --help`).
 """

@@ -12,8 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""What a segmenter may send: a catalogue of bad (and oddly encoded good) PointCloud2 messages,
-each with what the node is allowed to do with it, and a runner that feeds them to a live node.
+"""
+What a segmenter may send: a catalogue of bad (and oddly encoded good) PointCloud2 messages.
+
+Each comes with what the node is allowed to do with it; a runner feeds them to a live node.
 
 The same catalogue drives the test suite and `python -m tools robustness`, so every row of
 docs/results/ROBUSTNESS.md is also a passing test. Each case is built from one good cloud: what
@@ -230,8 +232,12 @@ def _rotation_error(q, R_true) -> float:
 
 
 class CaseRunner:
-    """Publishes cases one at a time to a node in this process and reads its verdict from the
-    node's own counters (so a rejection is seen even though it publishes nothing)."""
+    """
+    Publishes cases one at a time to a node in this process and reads its verdict.
+
+    The verdict comes from the node's own counters (so a rejection is seen even though it publishes
+    nothing).
+    """
 
     def __init__(self, node, client, good: GoodCloud, topic: str = 'segmented_object', max_error: float = 10.0):
         from geometry_msgs.msg import PoseStamped
@@ -249,9 +255,12 @@ class CaseRunner:
         self._sec = 1
 
     def ready(self, timeout: float = 60.0) -> bool:
-        """Matched both ways: the node has answered a good cloud. (The publisher may see the
-        subscription before the node's reader sees the publisher; a cloud sent in that gap is
-        lost, so the first is resent until one gets through.)"""
+        """
+        Wait until matched both ways: the node has answered a good cloud.
+
+        (The publisher may see the subscription before the node's reader sees the publisher; a
+        cloud sent in that gap is lost, so the first is resent until one gets through.)
+        """
         end = time.monotonic() + timeout
         while time.monotonic() < end and not self.pub.get_subscription_count():
             time.sleep(0.05)
@@ -312,6 +321,6 @@ class CaseRunner:
 
 
 def accepted(case: Case, out: Outcome) -> bool:
-    """The node did what the case allows, and answered the good cloud that came next."""
+    """Say whether the node did what the case allows and answered the next good cloud."""
     ok = out.outcome in case.allowed or (out.outcome == ANSWERED and ANY_ANSWER in case.allowed)
     return ok and out.next_good == ANSWERED

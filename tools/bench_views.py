@@ -12,8 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The camera's case in `python -m tools bench`: how fast known objects are answered view by view,
-where the time goes, and how the cost grows with the gallery and with the cloud.
+"""
+The camera's case in `python -m tools bench`: how fast known objects are answered view by view.
+
+Where the time goes, and how the cost grows with the gallery and with the cloud.
 
 Per view, single-threaded (one process with OMP_NUM_THREADS=1, as on a robot's shared computer):
 pcrp on the YCB test views (seed 0) of `python -m tools robot-report`, and Open3D's FPFH + RANSAC
@@ -51,7 +53,7 @@ def _rss_mb() -> float:
 
 
 def ycb_model(ycb: Path, cache: Path) -> tuple[str, dict]:
-    """The YCB model built as the README says (cached), and what building it cost."""
+    """Return the YCB model built as the README says (cached), and what building it cost."""
     path = cache / 'ycb'
     info = cache / 'ycb_build.json'
     if not (path / 'model.json').exists() or not info.exists():
@@ -65,8 +67,11 @@ def ycb_model(ycb: Path, cache: Path) -> tuple[str, dict]:
 
 
 def views(model_path: str, ycb: Path, per_kind: int, seed: int = 0) -> dict:
-    """Per-view seconds and per-stage seconds of pcrp, and Open3D RANSAC told the object, on the
-    same YCB views (free, and table with up known)."""
+    """
+    Time pcrp per view and per stage, and Open3D RANSAC told the object, on the same YCB views.
+
+    Free, and on a table with up known.
+    """
     from pcrp_core import PCRP
     from pcrp_core.evaluation.scenes import sample_scene
     from pcrp_core.sources.camera import Mesh
@@ -97,8 +102,11 @@ def views(model_path: str, ycb: Path, per_kind: int, seed: int = 0) -> dict:
 
 
 def _replicated(model, n: int):
-    """The model's templates tiled to n objects (an answer's cost depends on how many there are,
-    not on which object each is)."""
+    """
+    Return the model's templates tiled to n objects.
+
+    An answer's cost depends on how many there are, not on which object each is.
+    """
     from pcrp_core.instance.matcher import InstanceMatcher
     from pcrp_core.instance.templates import Templates
     from dataclasses import fields

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Broken model files, and what the node and the CLI do at start-up with each.
+"""
+Broken model files, and what the node and the CLI do at start-up with each.
 
 Each fault damages a copy of a good model directory the way a disk, a download or a person
 might. Both programs must stop with one error line naming the file and the problem and a
@@ -105,8 +106,12 @@ class StartUp:
     stderr: str
 
     def error_lines(self) -> list[str]:
-        """Our lines on stderr; rcl's own warnings about the environment (e.g. a deprecated
-        variable) are not the program's to answer for."""
+        """
+        Return our lines on stderr.
+
+        rcl's own warnings about the environment (e.g. a deprecated variable) are not the program's
+        to answer for.
+        """
         return [line for line in self.stderr.splitlines() if line.strip() and '] [rcl]:' not in line]
 
 

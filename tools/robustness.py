@@ -12,8 +12,11 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""`python -m tools robustness`: regenerate docs/results/ROBUSTNESS.md, what the node did with every bad
-input, broken model file and damaged bag we could think of, and the soak figures.
+"""
+`python -m tools robustness`: regenerate docs/results/ROBUSTNESS.md.
+
+What the node did with every bad input, broken model file and damaged bag we could think of, and
+the soak figures.
 
 Every row comes from running the real thing (the node over DDS, the node and CLI as
 processes, the bag commands on real bag files), through the same catalogues the tests use.
@@ -38,8 +41,14 @@ REPORT = 'ROBUSTNESS.md'
 
 # -- bags with surprises ------------------------------------------------------------------------------
 def mixed_bag(path: Path) -> dict:
-    """A bag as a user may hand over: clouds on the expected topic and on another one, a cloud
-    without a z field, and a topic of another type. Returns what was written."""
+    """
+    Write a bag as a user may hand it over.
+
+    Clouds on the expected topic and on another one, a cloud without a z field, and a topic of
+    another type.
+
+    Returns what was written.
+    """
     from pcrp_core.sources import load_source
     from pcrp_ros.bags import BagWriter, T, cloud_msg, header
 
@@ -57,8 +66,11 @@ def mixed_bag(path: Path) -> dict:
 
 
 def truncated_bag(path: Path, storage: str = 'mcap', keep: float = 0.6) -> int:
-    """A bag of 6 clouds whose file is cut to `keep` of its bytes, as a recorder killed mid-write
-    leaves it. Returns the number of clouds written."""
+    """
+    Write a bag of 6 clouds and cut its file to `keep` of its bytes.
+
+    As a recorder killed mid-write leaves it. Returns the number of clouds written.
+    """
     from pcrp_ros.bag_commands import make_bag
 
     n = make_bag(path, 'procedural:5', count=6, rate=10, seed=1, storage=storage)

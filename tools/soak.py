@@ -12,12 +12,15 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Soak: the node as its own process, fed a mix of good and bad clouds on several topics at a
-steady rate, then held to account: every cloud sent is received, every bad one refused under
-its reason, every good one answered, refused for fit or dropped as stale, memory flat, no
-crash, and a clean exit on Ctrl-C.
+"""
+Soak: the node as its own process, fed a mix of good and bad clouds, then held to account.
 
-`python -m tools soak` runs it (10 minutes, 4 topics, 10 Hz by default); the test suite runs a short one.
+Fed on several topics at a steady rate; held to account: every cloud sent is received, every bad
+one refused under its reason, every good one answered, refused for fit or dropped as stale, memory
+flat, no crash, and a clean exit on Ctrl-C.
+
+`python -m tools soak` runs it (10 minutes, 4 topics, 10 Hz by default); the test suite runs a
+short one.
 """
 from __future__ import annotations
 
@@ -38,8 +41,11 @@ NODE_NAME = 'pcrp_soak_node'
 
 
 def refused_on_arrival():
-    """Bad cases with exactly one allowed outcome, a rejection the node makes before queueing
-    (so it is counted whatever the load): reason -> case."""
+    """
+    Return the bad cases with exactly one allowed outcome, a rejection made before queueing.
+
+    So it is counted whatever the load: reason -> case.
+    """
     out = {}
     for c in CASES:
         if len(c.allowed) == 1:
@@ -50,8 +56,12 @@ def refused_on_arrival():
 
 
 class _NodeProcesses:
-    """k node processes, each answering its share of the topics (round robin), as a user scales
-    out: one model file, several processes, topics split between them by parameter."""
+    """
+    k node processes, each answering its share of the topics (round robin).
+
+    As a user scales out: one model file, several processes, topics split between them by
+    parameter.
+    """
 
     def __init__(self, topics, k: int, model_path, workers: int = 1):
         self.workers = workers
@@ -78,7 +88,7 @@ class _NodeProcesses:
         return all(p.poll() is None for p in self.procs)
 
     def rss_mb(self) -> float:
-        """The node processes' resident memory, their worker processes' included."""
+        """Return the node processes' resident memory, their worker processes' included."""
         from tools.bench import tree_rss_mb
         return sum(tree_rss_mb(p.pid) for p in self.procs)
 
@@ -119,8 +129,12 @@ class _Diagnostics:
 
 
 def camera_clouds(n: int) -> list[GoodCloud]:
-    """The shipped demo bag's depth-camera views of the shipped gallery: what the node meets when
-    run as `make demo` runs it (thousands of points each, not a few hundred)."""
+    """
+    Return the shipped demo bag's depth-camera views of the shipped gallery.
+
+    What the node meets when run as `make demo` runs it (thousands of points each, not a few
+    hundred).
+    """
     from pcrp_ros.bags import read_bag
     from pcrp_ros.demo import DEMO_BAG
 

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Known objects seen by a depth camera: a gallery of meshes, one-sided views in metres.
+"""
+Known objects seen by a depth camera: a gallery of meshes, one-sided views in metres.
 
 When a model is built from meshes, what a camera can see of each object is worked out once
 (templates.py): views rendered from all around, their silhouettes (signatures.py) and which

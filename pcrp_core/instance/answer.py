@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Answering a camera's cloud from a gallery of meshes, view by view (matcher.py), as a PoseResult."""
+"""Answer a camera's cloud from a gallery of meshes, view by view (matcher.py), as a PoseResult."""
 from __future__ import annotations
 
 import time
@@ -26,8 +26,11 @@ from pcrp_core.result import PoseResult
 
 def answer(model, pts: np.ndarray, viewpoint: np.ndarray, up_pair, opts: QueryOptions, timings: dict,
            t0: float) -> PoseResult:
-    """The PoseResult of a cleaned cloud pts seen from viewpoint (see PCRP.estimate). The cloud
-    is moved so the camera is at the origin; its frame's orientation does not matter."""
+    """
+    Return the PoseResult of a cleaned cloud pts seen from viewpoint (see PCRP.estimate).
+
+    The cloud is moved so the camera is at the origin; its frame's orientation does not matter.
+    """
     rng = np.random.default_rng(opts.seed)
     up, up_object = (None, None) if up_pair is None else up_pair
     match = model.matcher.match(pts - viewpoint, model.instance_options, up, up_object, rng, timings)

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The evidence an instance answer gives about itself, and the answers a confidence is learnt on.
+"""
+The evidence an instance answer gives about itself, and the answers a confidence is learnt on.
 
 Views for calibration are rendered when the model is built, from the gallery's own meshes, with
 seeds of their own (CALIBRATION_SEED: never a benchmark's): in free space and, when the objects'
@@ -45,7 +46,7 @@ POSE_RIGHT = 0.1   # of the object's diameter, as ADD-S counts it
 
 
 def features(match, n_points: int) -> dict:
-    """What a Match says about how likely it is right."""
+    """Return what a Match says about how likely it is right."""
     best = match.best.fit
     second = min((c.fit.cost for c in match.others), default=2.0)
     coarse = [c for c, _ in match.coarse]
@@ -58,8 +59,11 @@ def features(match, n_points: int) -> dict:
 
 
 def calibration_views(meshes: list, up_axis, views_per_object: int = 2, seed: int = CALIBRATION_SEED):
-    """(object index, Scene) pairs: views_per_object per object and kind, alternately occluded.
-    Table views only for objects modelled z up (as the scene sampler stands them)."""
+    """
+    (object index, Scene) pairs: views_per_object per object and kind, alternately occluded.
+
+    Table views only for objects modelled z up (as the scene sampler stands them).
+    """
     from pcrp_core.evaluation.scenes import sample_scene
 
     kinds = ('free', 'table') if up_axis is not None and np.allclose(up_axis, [0.0, 0.0, 1.0]) else ('free',)
@@ -68,9 +72,12 @@ def calibration_views(meshes: list, up_axis, views_per_object: int = 2, seed: in
 
 
 def answer_view(model, index: int, scene) -> dict:
-    """One calibration view answered with its object in the gallery and left out: each answer's
-    features, object, cost and surface error (mean distance from the object's true surface to
-    the answer's posed surface, which for the object itself is ADD-S)."""
+    """
+    Answer one calibration view with its object in the gallery and left out.
+
+    Returns each answer's features, object, cost and surface error (mean distance from the object's
+    true surface to the answer's posed surface, which for the object itself is ADD-S).
+    """
     tpl = model.templates
     points = model.prepare(scene.points.astype(np.float64))
     use_up = scene.up is not None and model.up_axis is not None
@@ -89,9 +96,12 @@ def answer_view(model, index: int, scene) -> dict:
 
 
 def find_twins(views: list[dict]) -> list[tuple[int, int]]:
-    """Pairs (i, j) of objects each of which, left out, is answered as the other in most of its
-    unoccluded views at a cost at most TWIN_RATIO times that of the answer with it in the gallery
-    (median; that answer may itself be the twin)."""
+    """
+    Find the pairs (i, j) of objects each of which, left out, is answered as the other.
+
+    Answered so in most of its unoccluded views, at a cost at most TWIN_RATIO times that of the
+    answer with it in the gallery (median; that answer may itself be the twin).
+    """
     ratios, answers = defaultdict(list), defaultdict(list)
     for v in views:
         if v['occluded'] or 'unknown' not in v:
@@ -107,9 +117,13 @@ def find_twins(views: list[dict]) -> list[tuple[int, int]]:
 
 
 def labelled_samples(views: list[dict], twins: list[tuple[int, int]]) -> tuple[list, list]:
-    """(features, right) of the calibration answers: right when the answer is the object or its
-    twin, with the surface within a tenth of the diameter; a left-out object answered by its twin
-    is left out of the samples (not an object the gallery lacks)."""
+    """
+    Return (features, right) of the calibration answers.
+
+    Right when the answer is the object or its twin, with the surface within a tenth of the
+    diameter; a left-out object answered by its twin is left out of the samples (not an object the
+    gallery lacks).
+    """
     pairs = {frozenset(p) for p in twins}
     same = lambda i, j: i == j or frozenset((i, j)) in pairs   # noqa: E731
     X, y = [], []
@@ -124,9 +138,13 @@ def labelled_samples(views: list[dict], twins: list[tuple[int, int]]) -> tuple[l
 
 
 def calibrate(model, meshes: list, n_jobs=None, progress=None, views_per_object: int | None = None):
-    """(Calibration of the model's instance answers, twin pairs as gallery IDs), learnt on views
-    of its own meshes; no Calibration when the views give no wrong answer to learn from (a gallery
-    of one object), and the confidence is then a monotone stand-in (instance/answer.py)."""
+    """
+    Learn the calibration of the model's instance answers on views of its own meshes.
+
+    Returns (Calibration, twin pairs as gallery IDs); no Calibration when the views give no wrong
+    answer to learn from (a gallery of one object), and the confidence is then a monotone stand-in
+    (instance/answer.py).
+    """
     from pcrp_core.confidence import fit_calibration
     from pcrp_core.parallel import calibration_answers, parallel_map
 

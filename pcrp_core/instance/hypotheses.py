@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Poses to try for one gallery object, before any is refined: from views, or upright turns.
+"""
+Poses to try for one gallery object, before any is refined: from views, or upright turns.
 
 Poses map the object's frame into the camera's: p_camera = R @ p_object + t.
 """
@@ -46,9 +47,12 @@ class QueryView:
 
 def from_views(query: QueryView, frames: np.ndarray, signatures: np.ndarray, view_centres: np.ndarray,
                n: int):
-    """The n (view, roll) pairs whose silhouettes agree best with the query's, as poses
-    (R (n, 3, 3), t (n, 3)): the view's ray frame laid on the query's, turned by the roll, its
-    centroid on the query's. Returns R, t and each pose's view index."""
+    """
+    Return poses from the n (view, roll) pairs whose silhouettes agree best with the query's.
+
+    As poses (R (n, 3, 3), t (n, 3)): the view's ray frame laid on the query's, turned by the roll,
+    its centroid on the query's. Returns R, t and each pose's view index.
+    """
     cost = shift_costs(query.signature, signatures)
     best = np.argsort(cost.ravel())[:n]
     view, shift = np.divmod(best, cost.shape[1])
@@ -60,9 +64,13 @@ def from_views(query: QueryView, frames: np.ndarray, signatures: np.ndarray, vie
 
 def upright(query: QueryView, up_camera: np.ndarray, up_object: np.ndarray, cameras: np.ndarray,
             view_centres: np.ndarray, n: int):
-    """Poses keeping the object's up axis on the known up direction, turned every 360/n degrees
-    about it (a yaw search: an object standing on a table is known but for its heading). Each
-    pose's centroid is that of the stored view seen from nearest where the camera then stands."""
+    """
+    Return poses keeping the object's up axis on the known up direction, turned about it.
+
+    Turned every 360/n degrees about it (a yaw search: an object standing on a table is known but
+    for its heading). Each pose's centroid is that of the stored view seen from nearest where the
+    camera then stands.
+    """
     R = about(up_camera, np.arange(n) * (2 * np.pi / n)) @ rotation_taking(up_object, up_camera)
     # where the camera stands, seen from the object: towards it from the query's centroid,
     # in the object's frame under each pose
@@ -74,9 +82,13 @@ def upright(query: QueryView, up_camera: np.ndarray, up_object: np.ndarray, came
 
 def coarse_cost(R: np.ndarray, t: np.ndarray, view: np.ndarray, query_sample: np.ndarray,
                 surface_tree: cKDTree, view_samples: np.ndarray, query_tree: cKDTree) -> np.ndarray:
-    """(H,) a cheap cost per pose: mean distance from a few query points to the object's surface,
-    plus from a few points of the pose's view to the query. Both ways, because a part of the
-    object that fits the query's points well can still show what the camera did not see."""
+    """
+    Return a cheap cost per pose, (H,).
+
+    The mean distance from a few query points to the object's surface, plus from a few points of
+    the pose's view to the query. Both ways, because a part of the object that fits the query's
+    points well can still show what the camera did not see.
+    """
     back = np.einsum('hni,hij->hnj', query_sample[None] - t[:, None], R)
     to_surface = surface_tree.query(back.reshape(-1, 3))[0].reshape(len(R), -1).mean(axis=1)
     shown = np.einsum('hij,hnj->hni', R, view_samples[view]) + t[:, None]

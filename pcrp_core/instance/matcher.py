@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Which known object a camera's cloud shows, and its pose: the steps of the instance pipeline.
+"""
+Which known object a camera's cloud shows, and its pose: the steps of the instance pipeline.
 
 1. Shortlist: objects some view of which has the query's shape (spread along its principal
    axes, in metres): size alone rules out most of a household gallery.
@@ -47,9 +48,14 @@ class Candidate:
 
 @dataclass
 class Match:
-    """The answer and what it beat: best, the best candidate of each other refined object
-    (best first), the distance beyond which a point counted as unexplained and the noise it was
-    set from, and how the hypotheses ranked the shortlisted objects."""
+    """
+    The answer and what it beat.
+
+    best, and the best candidate of each other refined object (best first); the distance beyond
+    which a point counted as unexplained and the noise it was set from; and how the hypotheses
+    ranked the shortlisted objects.
+    """
+
     best: Candidate
     others: list[Candidate]
     tau: float
@@ -81,18 +87,26 @@ class InstanceMatcher:
         return self._surfaces[i]
 
     def shortlist(self, shape: np.ndarray, n: int, exclude=()) -> np.ndarray:
-        """Indices of the n objects with a view nearest the query's shape, nearest first."""
+        """
+        Return the indices of the n objects with a view nearest the query's shape.
+
+        Nearest first.
+        """
         nearest = np.linalg.norm(self.templates.shapes - shape, axis=2).min(axis=1)
         nearest[list(exclude)] = np.inf
         return np.argsort(nearest)[: min(n, len(nearest) - len(exclude))]
 
     def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,
               exclude=()) -> Match:
-        """points: (N, 3) in the camera's frame (camera at the origin), cleaned and thinned;
+        """
+        Match a cloud against the gallery: which object it shows, in which pose, and what it beat.
+
+        points: (N, 3) in the camera's frame (camera at the origin), cleaned and thinned;
         opts: InstanceOptions.
         up: the up direction in that frame when known, with up_object the objects' up axis.
         exclude: gallery indices not to consider (how a calibration asks what the answer would
-        be if the object were not in the gallery)."""
+        be if the object were not in the gallery).
+        """
         import open3d as o3d
 
         tpl = self.templates

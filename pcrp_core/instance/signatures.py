@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Silhouette signatures: how far a view reaches, and how deep it is, in each direction around it.
+"""
+Silhouette signatures: how far a view reaches, and how deep it is, in each direction around it.
 
 A view is described in its ray frame: z along the line of sight through its centroid, x the
 camera's x axis made normal to it. Turning the camera about that line shifts the signature's
@@ -41,8 +42,12 @@ def ray_frame(line_of_sight: np.ndarray, camera_x: np.ndarray) -> np.ndarray:
 
 
 def signature(points: np.ndarray, frame: np.ndarray, centre: np.ndarray) -> np.ndarray:
-    """(SECTORS, 2): per sector around the line of sight, the reach of the points (radius, metres)
-    and their mean depth relative to the centroid; zeros where a sector holds no point."""
+    """
+    Return a view's silhouette signature, an array (SECTORS, 2).
+
+    Per sector around the line of sight, the reach of the points (radius, metres) and their mean
+    depth relative to the centroid; zeros where a sector holds no point.
+    """
     local = (points - centre) @ frame.T
     angle = np.arctan2(local[:, 1], local[:, 0])
     sector = ((angle + np.pi) * (SECTORS / (2 * np.pi))).astype(np.int64) % SECTORS
@@ -63,12 +68,16 @@ _SHIFTED = (np.arange(SECTORS)[None, :] - np.arange(SECTORS)[:, None]) % SECTORS
 
 
 def shift_costs(query: np.ndarray, views: np.ndarray, depth_weight: float = 0.5) -> np.ndarray:
-    """(V, SECTORS): mean squared difference between the query's signature and each stored
-    view's turned by each shift s (a roll of s sectors about the line of sight)."""
+    """
+    Return the (V, SECTORS) costs of the query's signature against each stored view's, rolled.
+
+    The mean squared difference between the query's signature and each stored view's turned by each
+    shift s (a roll of s sectors about the line of sight).
+    """
     diff = views[:, _SHIFTED] - query[None, None]
     return (diff[..., 0] ** 2).mean(-1) + depth_weight * (diff[..., 1] ** 2).mean(-1)
 
 
 def shift_angle(shift) -> np.ndarray:
-    """The roll, radians, that a shift of that many sectors stands for."""
+    """Return the roll, radians, that a shift of that many sectors stands for."""
     return np.asarray(shift) * (2 * np.pi / SECTORS)

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""What a depth camera can see of each gallery mesh, worked out once when the model is built.
+"""
+What a depth camera can see of each gallery mesh, worked out once when the model is built.
 
 Per object: surface points with outward normals (Poisson disk, so spacing is even), and from
 directions all around the object, two things. Views: what a camera there measures (ray cast,
@@ -34,22 +35,29 @@ from pcrp_core.visibility import sphere_directions
 
 
 def spread(points: np.ndarray) -> np.ndarray:
-    """(3,) standard deviations along the principal axes, largest first: the size and shape of
-    a cloud, whatever its pose."""
+    """
+    Return (3,) standard deviations along the principal axes, largest first.
+
+    The size and shape of a cloud, whatever its pose.
+    """
     centred = points - points.mean(axis=0)
     eig = np.linalg.eigvalsh(centred.T @ centred / max(len(points), 1))
     return np.sqrt(np.maximum(eig, 0.0))[::-1]
 
 
 def shape_code(points: np.ndarray) -> np.ndarray:
-    """The spread in log metres: sizes compared by ratio, so a 1 cm difference means more on a
-    die than on a skillet."""
+    """
+    Return the spread in log metres.
+
+    Sizes are compared by ratio, so a 1 cm difference means more on a die than on a skillet.
+    """
     return np.log(spread(points) + 1e-4)
 
 
 @dataclass(frozen=True)
 class TemplateSettings:
     """How templates are made; recorded in the model so queries are described alike."""
+
     views: int = 64                  # directions views are rendered from
     visibility_directions: int = 256  # directions visibility is worked out for
     surface_points: int = 2048       # surface points per object (Poisson disk)
@@ -61,6 +69,7 @@ class TemplateSettings:
 @dataclass
 class Templates:
     """Stacked per-object arrays (first axis: gallery object)."""
+
     points: np.ndarray          # (O, n, 3) surface points, object frame
     normals: np.ndarray         # (O, n, 3) outward unit normals
     spacing: np.ndarray         # (O,) typical distance between neighbouring surface points
@@ -79,7 +88,7 @@ class Templates:
 
     @property
     def directions(self) -> np.ndarray:
-        """(D, 3) the visibility directions (the same for every object)."""
+        """(D, 3): the visibility directions, the same for every object."""
         return sphere_directions(self.visible.shape[1])
 
     def to_arrays(self, prefix: str = 'templates_') -> dict:
@@ -95,8 +104,11 @@ class Templates:
 
     @classmethod
     def from_arrays(cls, arrays: dict, prefix: str = 'templates_') -> 'Templates | None':
-        """The templates stored in a model's arrays; None when the model has none (built from
-        point clouds)."""
+        """
+        Return the templates stored in a model's arrays.
+
+        None when the model has none (built from point clouds).
+        """
         if prefix + 'points' not in arrays:
             return None
         n = int(arrays[prefix + 'visible_count'])
@@ -109,8 +121,12 @@ class Templates:
 
 
 def _surface(mesh: Mesh, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """n points spread evenly over the mesh (Poisson disk) and the normals of the faces they lie
-    on (interpolated vertex normals bend across the edges of a low-poly mesh, a box's)."""
+    """
+    Return n points spread evenly over the mesh (Poisson disk) and the normals of their faces.
+
+    The normals of the faces they lie on, since interpolated vertex normals bend across the edges
+    of a low-poly mesh, a box's.
+    """
     import open3d as o3d
 
     m = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(mesh.vertices),
@@ -125,7 +141,7 @@ def _surface(mesh: Mesh, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 
 def object_templates(mesh: Mesh, settings: TemplateSettings = TemplateSettings(),
                      camera: PinholeCamera = PinholeCamera(), seed: int = 0) -> dict:
-    """The templates of one mesh (in metres) as a dict of Templates' fields."""
+    """Return the templates of one mesh (in metres) as a dict of Templates' fields."""
     points, normals = _surface(mesh, settings.surface_points, seed)
     centre = points.mean(axis=0)
     diameter = mesh.diameter

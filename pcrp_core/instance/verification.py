@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""How well a posed object explains a cloud from a camera, and the cloud what the object shows.
+"""
+How well a posed object explains a cloud from a camera, and the cloud what the object shows.
 
 Two sets of distances decide: from each point of the cloud to the object's surface (is every
 measured point on the object?) and from each surface point the camera would see under the pose
@@ -34,6 +35,7 @@ from scipy.spatial import cKDTree
 @dataclass
 class Surface:
     """A cloud with what the distances need: its tree, normals and point spacing."""
+
     points: np.ndarray
     normals: np.ndarray
     tree: cKDTree
@@ -41,7 +43,7 @@ class Surface:
 
 
 def local_planes(points: np.ndarray, tree: cKDTree, k: int = 10) -> tuple[np.ndarray, np.ndarray]:
-    """(normals (N, 3), plane residual rms (N,)) from each point's k nearest neighbours."""
+    """Fit a plane to each point's k nearest neighbours: (normals (N, 3), residual rms (N,))."""
     k = min(k, len(points))
     nb = points[tree.query(points, k)[1]]
     centred = nb - nb.mean(axis=1, keepdims=True)
@@ -50,8 +52,12 @@ def local_planes(points: np.ndarray, tree: cKDTree, k: int = 10) -> tuple[np.nda
 
 
 def query_surface(points: np.ndarray) -> tuple[Surface, float]:
-    """The cloud as a Surface, and its noise: the median distance of points from the planes of
-    their neighbourhoods (the range noise of the camera as this cloud shows it)."""
+    """
+    Return the cloud as a Surface, and its noise.
+
+    The noise is the median distance of points from the planes of their neighbourhoods (the range
+    noise of the camera as this cloud shows it).
+    """
     tree = cKDTree(points)
     normals, residual = local_planes(points, tree)
     spacing = float(np.median(tree.query(points, 2)[0][:, 1]))
@@ -59,9 +65,12 @@ def query_surface(points: np.ndarray) -> tuple[Surface, float]:
 
 
 def distances(points: np.ndarray, surface: Surface, k: int = 3) -> np.ndarray:
-    """(N,) distance from each point to the surface: to the nearest of the tangent planes of its
-    k nearest surface points that lie within two spacings (at an edge, one of them is on the
-    right face), else to the nearest point itself."""
+    """
+    Return the (N,) distance from each point to the surface.
+
+    To the nearest of the tangent planes of its k nearest surface points that lie within two
+    spacings (at an edge, one of them is on the right face), else to the nearest point itself.
+    """
     d, i = surface.tree.query(points, k)
     along_normal = np.abs(np.einsum('nkj,nkj->nk', points[:, None] - surface.points[i], surface.normals[i]))
     near = d < 2.0 * surface.spacing
@@ -70,19 +79,26 @@ def distances(points: np.ndarray, surface: Surface, k: int = 3) -> np.ndarray:
 
 def visible_points(visible: np.ndarray, directions: np.ndarray, centre: np.ndarray, R: np.ndarray,
                    t: np.ndarray) -> np.ndarray:
-    """Indices of the object's surface points a camera at the origin sees under pose (R, t):
-    those seen from the stored visibility direction nearest the camera's."""
+    """
+    Return the object's surface points a camera at the origin sees under pose (R, t), as indices.
+
+    Those seen from the stored visibility direction nearest the camera's.
+    """
     camera = -R.T @ t
     return np.flatnonzero(visible[int(np.argmax(directions @ (camera - centre)))])
 
 
 @dataclass
 class Fit:
-    """The verdict on one posed object: cost (lower is better), made of the mean capped squared
-    distance of the cloud to the object (unexplained) and of the expected surface to the cloud
-    (unshown), in units of tau squared, each in [0, 1]; the shares of cloud points on the object
-    (fit) and of expected surface points in the cloud (coverage), both within tau, and the rms
-    of the explained distances."""
+    """
+    The verdict on one posed object.
+
+    Its cost (lower is better), made of the mean capped squared distance of the cloud to the object
+    (unexplained) and of the expected surface to the cloud (unshown), in units of tau squared, each
+    in [0, 1]; the shares of cloud points on the object (fit) and of expected surface points in the
+    cloud (coverage), both within tau; and the rms of the explained distances.
+    """
+
     cost: float
     unexplained: float
     unshown: float
@@ -96,10 +112,13 @@ class Fit:
 
 def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray, t: np.ndarray,
           tau: float, unshown_weight: float = 1.0) -> Fit:
-    """The Fit of the object (surface, in its own frame) at pose (R, t) to the query; expected:
-    indices of the surface points the camera would see. unshown_weight: how much an expected
-    point missing from the cloud costs against a cloud point off the object (less than 1: the
-    segmenter may have cut away what something in front of the object hid)."""
+    """
+    Return the Fit of the object (surface, in its own frame) at pose (R, t) to the query.
+
+    expected: indices of the surface points the camera would see. unshown_weight: how much an
+    expected point missing from the cloud costs against a cloud point off the object (less than 1:
+    the segmenter may have cut away what something in front of the object hid).
+    """
     to_object = distances((query.points - t) @ R, surface)
     if len(expected):
         to_query = distances(surface.points[expected] @ R.T + t, query)

@@ -12,7 +12,11 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Where gallery objects and queries come from: ModelNet40 archives, the user's folders, the generator."""
+"""
+Where gallery objects and queries come from.
+
+ModelNet40 archives, the user's folders, the generator.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -24,10 +28,14 @@ __all__ = ['GalleryObject', 'load_source', 'load_sources']
 
 def load_source(spec: str, split: str = 'train', n_points: int = 1024, seed: int = 0,
                 limit_per_category: int | None = None) -> list[GalleryObject]:
-    """`household[:N]` (the embedded gallery of household meshes in metres, or N variants of its
+    """
+    Load the gallery objects of one source.
+
+    `household[:N]` (the embedded gallery of household meshes in metres, or N variants of its
     kinds), `procedural[:N]` (the embedded generator, N per category, default 25), a ModelNet40
     category archive (`chair.npz`), or a folder of meshes or clouds (one object per file, or one
-    sub-folder per category)."""
+    sub-folder per category).
+    """
     if spec == 'household' or spec.startswith('household:'):
         from pcrp_core.sources.household import household_gallery
 

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""A depth camera looking at meshes: what it measures, by ray casting (Open3D RaycastingScene).
+"""
+A depth camera looking at meshes: what it measures, by ray casting (Open3D RaycastingScene).
 
 Coordinates are the camera's optical frame (x right, y down, z forward, metres), the frame a
 ROS depth driver publishes its clouds in. Each pixel's ray runs through ((u - cx) / fx,
@@ -29,8 +30,12 @@ import numpy as np
 
 @dataclass(frozen=True)
 class PinholeCamera:
-    """Intrinsics of an ideal pinhole camera; the defaults are a 640 x 480 depth camera with a
-    58 degree horizontal field of view."""
+    """
+    Intrinsics of an ideal pinhole camera.
+
+    The defaults are a 640 x 480 depth camera with a 58 degree horizontal field of view.
+    """
+
     width: int = 640
     height: int = 480
     fx: float = 600.0
@@ -44,8 +49,11 @@ class PinholeCamera:
         return np.column_stack([self.fx * points[:, 0] / z + self.cx, self.fy * points[:, 1] / z + self.cy])
 
     def window(self, points: np.ndarray, margin: int = 2) -> tuple[int, int, int, int] | None:
-        """(u0, v0, u1, v1): the pixels that can see the points (a mesh's vertices), clipped to the
-        image; None when none of them is in front of the camera and inside it."""
+        """
+        Return (u0, v0, u1, v1): the pixels that can see the points (a mesh's vertices).
+
+        Clipped to the image; None when none of them is in front of the camera and inside it.
+        """
         ahead = points[points[:, 2] > 1e-6]
         if len(ahead) < len(points) or len(ahead) == 0:
             # part of the object is behind the camera: every pixel may see it
@@ -59,8 +67,12 @@ class PinholeCamera:
 
 @dataclass(frozen=True)
 class RangeNoise:
-    """Gaussian range error along each ray with sigma(z) = base + quadratic * z**2 (metres):
-    about 1.1 mm at 0.45 m, 2 mm at 0.7 m and 2.9 mm at 0.9 m with the defaults."""
+    """
+    Gaussian range error along each ray with sigma(z) = base + quadratic * z**2 (metres).
+
+    About 1.1 mm at 0.45 m, 2 mm at 0.7 m and 2.9 mm at 0.9 m with the defaults.
+    """
+
     base: float = 0.0005
     quadratic: float = 0.003
 
@@ -68,7 +80,7 @@ class RangeNoise:
         return self.base + self.quadratic * np.asarray(depth) ** 2
 
     def apply(self, points: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """points moved along their rays (from the optical centre) by the range error."""
+        """Move points along their rays (from the optical centre) by the range error."""
         dist = np.linalg.norm(points, axis=1, keepdims=True)
         err = rng.normal(size=(len(points), 1)) * self.sigma(points[:, 2:3])
         return points * (1.0 + err / np.maximum(dist, 1e-12))
@@ -76,7 +88,8 @@ class RangeNoise:
 
 @dataclass(frozen=True)
 class Mesh:
-    """A triangle mesh: vertices (V, 3) float and triangles (T, 3) int, in its own frame and units."""
+    """A triangle mesh: vertices (V, 3) float, triangles (T, 3) int, in its own frame and units."""
+
     vertices: np.ndarray
     triangles: np.ndarray
 
@@ -104,7 +117,11 @@ class Mesh:
         return float(pdist(v).max()) if len(v) > 1 else 0.0
 
     def sample(self, n: int, seed: int = 0) -> np.ndarray:
-        """(n, 3) points spread evenly over the surface (Poisson disk, from an area-uniform sample)."""
+        """
+        Return (n, 3) points spread evenly over the surface.
+
+        Poisson disk, from an area-uniform sample.
+        """
         import open3d as o3d
 
         m = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(self.vertices),
@@ -114,8 +131,12 @@ class Mesh:
 
 
 def look_at(position: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(R, t) taking a frame's points into the optical frame of a camera at position looking at
-    target: p_camera = R @ p + t. The roll is arbitrary but fixed (x kept level where it can be)."""
+    """
+    Return (R, t) into the optical frame of a camera at position looking at target.
+
+    (R, t) takes a frame's points into that frame: p_camera = R @ p + t. The roll is arbitrary but
+    fixed (x kept level where it can be).
+    """
     z = np.asarray(target, float) - np.asarray(position, float)
     z = z / np.linalg.norm(z)
     helper = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
@@ -126,8 +147,11 @@ def look_at(position: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 class MeshCamera:
-    """One mesh, ray cast from many camera poses without rebuilding its acceleration structure:
-    the rays are moved into the mesh's frame instead of the mesh into the camera's."""
+    """
+    One mesh, ray cast from many camera poses without rebuilding its acceleration structure.
+
+    The rays are moved into the mesh's frame instead of the mesh into the camera's.
+    """
 
     def __init__(self, mesh: Mesh, camera: PinholeCamera = PinholeCamera()):
         import open3d as o3d
@@ -144,8 +168,11 @@ class MeshCamera:
         return self.scene.cast_rays(o3d.core.Tensor(rays))['t_hit'].numpy()
 
     def view(self, R: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """(N, 3) noiseless points the camera at pose (R, t) (mesh to optical frame) measures,
-        in the optical frame."""
+        """
+        Return (N, 3) noiseless points the camera at pose (R, t) measures, in the optical frame.
+
+        The pose (R, t) takes the mesh to the optical frame.
+        """
         cam = self.camera
         box = cam.window(self.mesh.vertices @ R.T + t)
         if box is None:
@@ -158,8 +185,11 @@ class MeshCamera:
         return dirs[hit] * depth[hit, None]
 
     def sees(self, position: np.ndarray, points: np.ndarray, tolerance: float = 1e-3) -> np.ndarray:
-        """(N,) whether each point on the mesh (mesh frame) is what a camera at position sees
-        along the ray towards it (nothing of the mesh in front of it)."""
+        """
+        Return (N,) whether each point on the mesh (mesh frame) is what a camera at position sees.
+
+        Seen along the ray towards it: nothing of the mesh in front of it.
+        """
         d = points - position
         dist = np.linalg.norm(d, axis=1)
         hit = self._cast(np.broadcast_to(position, d.shape), d / dist[:, None])
@@ -167,9 +197,13 @@ class MeshCamera:
 
 
 def render_depth(meshes: list[Mesh], camera: PinholeCamera) -> tuple[np.ndarray, np.ndarray]:
-    """(depth (H, W) float32, owner (H, W) int32) of meshes already placed in the optical frame:
-    depth inf and owner -1 where a ray hits nothing, else the index of the mesh it hits first.
-    Rays are cast only in the window the meshes can cover."""
+    """
+    Render meshes already placed in the optical frame: (depth (H, W) float32, owner (H, W) int32).
+
+    Depth inf and owner -1 where a ray hits nothing, else the index of the mesh it hits first.
+
+    Rays are cast only in the window the meshes can cover.
+    """
     import open3d as o3d
 
     depth = np.full((camera.height, camera.width), np.inf, np.float32)
@@ -198,7 +232,11 @@ def render_depth(meshes: list[Mesh], camera: PinholeCamera) -> tuple[np.ndarray,
 
 
 def depth_points(depth: np.ndarray, camera: PinholeCamera, mask: np.ndarray | None = None) -> np.ndarray:
-    """(N, 3) points in the optical frame of the pixels with finite depth (and mask, when given)."""
+    """
+    Return the pixels with finite depth as (N, 3) points in the optical frame.
+
+    Only those in mask, when given.
+    """
     keep = np.isfinite(depth) if mask is None else (mask & np.isfinite(depth))
     v, u = np.nonzero(keep)
     z = depth[v, u].astype(np.float64)
@@ -207,8 +245,11 @@ def depth_points(depth: np.ndarray, camera: PinholeCamera, mask: np.ndarray | No
 
 def view_of(mesh: Mesh, R: np.ndarray, t: np.ndarray, camera: PinholeCamera = PinholeCamera(),
             noise: RangeNoise | None = RangeNoise(), rng: np.random.Generator | None = None) -> np.ndarray:
-    """(N, 3) what the camera measures of one mesh placed at p_camera = R @ p_mesh + t, noisy
-    along the rays unless noise is None."""
+    """
+    Return (N, 3) what the camera measures of one mesh placed at p_camera = R @ p_mesh + t.
+
+    Noisy along the rays unless noise is None.
+    """
     depth, owner = render_depth([mesh.moved(R, t)], camera)
     pts = depth_points(depth, camera, owner == 0)
     if noise is not None and len(pts):

@@ -12,8 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The user's own objects: a folder of meshes or clouds, one object per file, or of sub-folders,
-one per category.
+"""
+The user's own objects: a folder of meshes or clouds.
+
+One object per file, or a folder of sub-folders, one per category.
 
 Meshes (OBJ, PLY with faces, STL, OFF) are sampled to points, area-uniformly; clouds (PLY
 without faces, PCD, XYZ, NPY of shape (N, 3)) are used as they are. Objects are taken as
@@ -36,7 +38,11 @@ log = logging.getLogger('pcrp.sources')
 
 
 def read_points(path, n_points: int | None = None, seed: int = 0) -> np.ndarray:
-    """(N, 3) float64 points of a cloud or mesh file; meshes are sampled to n_points (default 2048)."""
+    """
+    Read (N, 3) float64 points of a cloud or mesh file.
+
+    Meshes are sampled to n_points (default 2048).
+    """
     path = Path(path)
     suffix = path.suffix.lower()
     if not path.is_file():
@@ -63,8 +69,12 @@ def read_points(path, n_points: int | None = None, seed: int = 0) -> np.ndarray:
 
 
 def read_object(path, n_points: int, seed: int = 0) -> tuple[np.ndarray, Mesh | None]:
-    """(points, mesh) of one file: a mesh is kept (a gallery renders what a camera sees of it) and
-    sampled area-uniformly to 4 x n_points, which the build thins evenly; a cloud has no mesh."""
+    """
+    Read (points, mesh) of one file.
+
+    A mesh is kept (a gallery renders what a camera sees of it) and sampled area-uniformly to 4 x
+    n_points, which the build thins evenly; a cloud has no mesh.
+    """
     path = Path(path)
     if path.suffix.lower() in MESH_SUFFIXES:
         mesh = o3d.io.read_triangle_mesh(str(path))
@@ -80,8 +90,12 @@ def _usable(folder: Path) -> list[Path]:
 
 
 def load_folder(root, n_points: int = 1024, seed: int = 0, limit: int | None = None):
-    """Every mesh or cloud directly in root is an object of its own (ID and category: the file's
-    stem, `025_mug`); each sub-folder is a category of objects (ID `<category>/<file stem>`)."""
+    """
+    Load the objects of a folder.
+
+    Every mesh or cloud directly in root is an object of its own (ID and category: the file's stem,
+    `025_mug`); each sub-folder is a category of objects (ID `<category>/<file stem>`).
+    """
     root = Path(root)
     groups = [(None, _usable(root))]
     groups += [(d.name, _usable(d)) for d in sorted(p for p in root.iterdir() if p.is_dir())]

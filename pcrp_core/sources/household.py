@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The embedded default: a procedural household gallery of meshes in metres, as a robot meets them.
+"""
+The embedded default: a procedural household gallery of meshes in metres, as a robot meets them.
 
 Cans, boxes, a mug, a bowl, a bottle, a plate, balls and fruit, tools: shapes of a grasping
 benchmark's kind, built from solids of revolution and boxes, each standing on z = 0 with z up,
@@ -31,9 +32,12 @@ SEGMENTS = 48
 
 
 def lathe(profile, segments: int = SEGMENTS) -> Mesh:
-    """The surface swept by turning profile [(radius, z), ...] about the z axis; ends on the axis
-    (radius 0) close it, so a profile out along the bottom, up the side and back in at the top
-    is a closed solid, and one that returns down inside is a thin-walled vessel."""
+    """
+    Return the surface swept by turning profile [(radius, z), ...] about the z axis.
+
+    Ends on the axis (radius 0) close it, so a profile out along the bottom, up the side and back
+    in at the top is a closed solid, and one that returns down inside is a thin-walled vessel.
+    """
     profile = np.asarray(profile, dtype=np.float64)
     angles = np.arange(segments) * 2 * np.pi / segments
     rings, verts = [], []
@@ -58,7 +62,7 @@ def lathe(profile, segments: int = SEGMENTS) -> Mesh:
 
 
 def box(size, centre=(0.0, 0.0, 0.0)) -> Mesh:
-    """An axis-aligned box of size (x, y, z) about centre."""
+    """Make an axis-aligned box of size (x, y, z) about centre."""
     sx, sy, sz = np.asarray(size, dtype=np.float64) / 2
     v = np.array([[x, y, z] for x in (-sx, sx) for y in (-sy, sy) for z in (-sz, sz)]) + np.asarray(centre)
     faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
@@ -67,7 +71,11 @@ def box(size, centre=(0.0, 0.0, 0.0)) -> Mesh:
 
 
 def union(*meshes: Mesh) -> Mesh:
-    """The meshes side by side in one (overlaps keep their inner faces, which no camera sees)."""
+    """
+    Put the meshes side by side in one.
+
+    Overlaps keep their inner faces, which no camera sees.
+    """
     verts, tris, n = [], [], 0
     for m in meshes:
         verts.append(m.vertices)
@@ -81,7 +89,7 @@ def _cylinder(r, h):
 
 
 def _vessel(r_bottom, r_top, h, wall, bottom=0.006):
-    """A cup or bowl: outside up, over the rim, inside down to the floor."""
+    """Make a cup or bowl: outside up, over the rim, inside down to the floor."""
     return lathe([(0, 0), (r_bottom, 0), (r_top, h), (r_top - wall, h), (r_bottom - wall, bottom), (0, bottom)])
 
 
@@ -129,7 +137,7 @@ def _plate(r, p):
 
 
 def _crate(x, y, z, p):
-    """A box with a lid overhanging on two sides: not a plain box from any side."""
+    """Make a box with a lid overhanging on two sides: not a plain box from any side."""
     return union(box([x, y, z], [0, 0, z / 2]), box([x + 0.02, y, 0.012], [0, 0, z + 0.006]))
 
 
@@ -162,8 +170,12 @@ def household_mesh(kind: str, params=None) -> Mesh:
 
 
 def household_gallery(n: int | None = None, seed: int = 0, n_points: int = 1024) -> list[GalleryObject]:
-    """The shipped 16 objects (n None), or n objects of the same kinds with proportions drawn
-    from seed (IDs `<kind>_<k>`), as GalleryObjects with meshes, z up."""
+    """
+    Return the shipped 16 objects (n None), or n objects of the same kinds.
+
+    The n objects have proportions drawn from seed (IDs `<kind>_<k>`); all are GalleryObjects with
+    meshes, z up.
+    """
     out = []
     if n is None:
         items = [(kind, kind, None) for kind in KINDS]

@@ -81,7 +81,7 @@ class Ellipsoid:
 
 
 def sample_parts(parts, n, rng) -> np.ndarray:
-    """n points over all parts, each part getting points in proportion to its area."""
+    """Sample n points over all parts, each part getting points in proportion to its area."""
     areas = np.array([p.area() for p in parts])
     counts = rng.multinomial(n, areas / areas.sum())
     return np.concatenate([p.sample(k, rng) for p, k in zip(parts, counts) if k])

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The embedded default data: procedural airplanes, chairs, sofas and cars.
+"""
+The embedded default data: procedural airplanes, chairs, sofas and cars.
 
 Objects follow ModelNet40's conventions so that a model built on one makes sense on the
 other: z up, centred on the point mean, farthest point at distance 1, and the category's

@@ -28,8 +28,11 @@ def random_rotation(rng: np.random.Generator) -> np.ndarray:
 
 def sensor_view(points: np.ndarray, camera: np.ndarray, rng: np.random.Generator,
                 noise_sigma: float = 0.0) -> np.ndarray:
-    """The points a sensor at `camera` sees, with Gaussian noise of noise_sigma (in the
-    points' units) along each viewing ray, as a depth camera's range error."""
+    """
+    Return the points a sensor at `camera` sees, with Gaussian noise along each viewing ray.
+
+    The noise has sigma noise_sigma (in the points' units), as a depth camera's range error.
+    """
     seen = points[visible_from(points, camera)]
     rays = seen - camera
     rays /= np.linalg.norm(rays, axis=1, keepdims=True)
@@ -38,10 +41,13 @@ def sensor_view(points: np.ndarray, camera: np.ndarray, rng: np.random.Generator
 
 def partial_view(points: np.ndarray, rng: np.random.Generator, noise_sigma: float = 0.005,
                  min_keep: float = 0.25, distance: float = 3.0, tries: int = 10, with_camera: bool = False):
-    """The side of the object seen from a random direction at `distance` object radii, with
-    Gaussian noise of noise_sigma (in object radii) along each viewing ray. Retries another
-    direction when less than min_keep of the points would be seen. with_camera: return
-    (points, camera position) instead."""
+    """
+    Return the side of the object seen from a random direction at `distance` object radii.
+
+    With Gaussian noise of noise_sigma (in object radii) along each viewing ray. Retries another
+    direction when less than min_keep of the points would be seen. with_camera: return (points,
+    camera position) instead.
+    """
     centre = points.mean(0)
     radius = np.linalg.norm(points - centre, axis=1).max()
     for _ in range(tries):
@@ -55,8 +61,11 @@ def partial_view(points: np.ndarray, rng: np.random.Generator, noise_sigma: floa
 
 
 def crop_half_plane(points: np.ndarray, rng: np.random.Generator, keep: float = 0.7) -> np.ndarray:
-    """The share `keep` of the points on one side of a plane of random direction (the paper's
-    partial protocol)."""
+    """
+    Return the share `keep` of the points on one side of a plane of random direction.
+
+    The paper's partial protocol.
+    """
     d = rng.normal(size=3)
     proj = (points - points.mean(0)) @ (d / np.linalg.norm(d))
     return points[proj <= np.quantile(proj, keep)]

@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""A gallery of meshes end to end: build (templates, calibration, twins), save, load, answer views."""
+"""A mesh gallery end to end: build (templates, calibration, twins), save, load, answer views."""
 import numpy as np
 import open3d as o3d
 import pytest

@@ -12,8 +12,11 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Whatever a segmenter sends: the core answers or refuses with a reason, never crashes.
-(The node's side of it is in test_node_robustness.py.)"""
+"""
+Whatever a segmenter sends: the core answers or refuses with a reason, never crashes.
+
+(The node's side of it is in test_node_robustness.py.)
+"""
 import time
 
 import numpy as np

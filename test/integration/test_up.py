@@ -46,8 +46,12 @@ def test_the_shipped_model_and_modelnet_and_generated_sources_say_z_is_up(model)
 
 @pytest.mark.parametrize('seed', [0, 1, 2])
 def test_answers_keep_the_given_up_even_when_it_is_wrong(model, seed):
-    """The prior is obeyed: told the truth the answer is right and upright; told the object is
-    upside down, the answer is upside down too, which it could not be if up were ignored."""
+    """
+    The prior is obeyed: told the truth the answer is right and upright.
+
+    Told the object is upside down, the answer is upside down too, which it could not be if up were
+    ignored.
+    """
     rng = np.random.default_rng(seed)
     R = Rotation.random(random_state=seed).as_matrix()
     cloud = generate_object(['chair', 'sofa', 'car'][seed], 100_000 + seed).astype(np.float64) @ R.T + rng.normal(size=3)

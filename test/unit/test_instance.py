@@ -61,7 +61,7 @@ def test_taking_and_about_are_the_rotations_they_say():
 
 @pytest.fixture(scope='module')
 def brick():
-    """A 12 x 6 x 3 cm brick, its templates, and a view of it from a known pose."""
+    """Make a 12 x 6 x 3 cm brick, its templates, and a view of it from a known pose."""
     mesh = box(0.12, 0.06, 0.03)
     tpl = stack([object_templates(mesh, SMALL)])
     R = Rotation.from_euler('xyz', [30, -20, 50], degrees=True).as_matrix()
