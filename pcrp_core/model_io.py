@@ -25,11 +25,10 @@ from __future__ import annotations
 
 import hashlib
 import json
-import zipfile
 from pathlib import Path
+import zipfile
 
 import numpy as np
-
 from pcrp_core.errors import ModelError
 
 FORMAT = 'pcrp-model'

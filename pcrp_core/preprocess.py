@@ -17,9 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 import open3d as o3d
-from scipy.spatial import cKDTree
-
 from pcrp_core.errors import InvalidCloud
+from scipy.spatial import cKDTree
 
 
 def finite_points(points) -> np.ndarray:

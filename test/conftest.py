@@ -13,15 +13,14 @@
 # limitations under the License.
 
 """Session-wide fixtures: one small real gallery model, built once for the whole suite."""
-import sys
 from pathlib import Path
+import sys
 from types import SimpleNamespace
 
-import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from helpers import MODELNET, modelnet  # noqa: E402
+from helpers import MODELNET, modelnet  # noqa: E402,I100
 
 GROUPS = ('unit', 'integration', 'ros', 'tools')
 

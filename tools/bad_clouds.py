@@ -24,12 +24,11 @@ a depth camera sees of a gallery object, in the camera's optical frame (z forwar
 from __future__ import annotations
 
 import copy
-import time
 from dataclasses import dataclass
+import time
 from typing import Callable
 
 import numpy as np
-
 from pcrp_core.sources.views import random_rotation, sensor_view
 from pcrp_ros.conversions import FLOAT32, xyz_to_pointcloud2
 

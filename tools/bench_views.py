@@ -28,12 +28,12 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 import resource
 import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -107,9 +107,10 @@ def _replicated(model, n: int):
 
     An answer's cost depends on how many there are, not on which object each is.
     """
+    from dataclasses import fields
+
     from pcrp_core.instance.matcher import InstanceMatcher
     from pcrp_core.instance.templates import Templates
-    from dataclasses import fields
 
     tpl = model.templates
     reps = np.resize(np.arange(len(tpl)), n)

@@ -21,17 +21,16 @@ non-zero exit, never a traceback. Shared by the test suite and `python -m tools 
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 import json
+from pathlib import Path
 import shutil
 import subprocess
 import sys
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
-
-from pcrp_core.model_io import ARRAYS_FILE, META_FILE, _sha256
+from pcrp_core.model_io import _sha256, ARRAYS_FILE, META_FILE
 
 
 def _edit_meta(path: Path, **changes) -> None:

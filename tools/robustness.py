@@ -26,13 +26,13 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+from pathlib import Path
 import platform
 import shutil
 import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -50,7 +50,7 @@ def mixed_bag(path: Path) -> dict:
     Returns what was written.
     """
     from pcrp_core.sources import load_source
-    from pcrp_ros.bags import BagWriter, T, cloud_msg, header
+    from pcrp_ros.bags import BagWriter, cloud_msg, header, T
 
     objs = load_source('procedural:5', split='train')[:3]
     with BagWriter(path) as bag:
@@ -134,10 +134,10 @@ def _published(stdout: str) -> int:
 
 # -- running the catalogues -----------------------------------------------------------------------------
 def run_cases(model) -> list[tuple]:
-    import rclpy
-    from tools.bad_clouds import CASES, CaseRunner, accepted, good_cloud
     from pcrp_ros.node import PcrpNode
     from pcrp_ros.spinning import ros_context, spinning
+    import rclpy
+    from tools.bad_clouds import accepted, CaseRunner, CASES, good_cloud
 
     rows = []
     with ros_context() as ctx:
@@ -304,7 +304,7 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
-    from pcrp_core import PCRP, default_model_path
+    from pcrp_core import default_model_path, PCRP
     from tools import soak as soak_mod
 
     command = 'python -m tools robustness' + (' --quick' if args.quick else '') + (

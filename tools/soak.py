@@ -24,18 +24,17 @@ short one.
 """
 from __future__ import annotations
 
+from collections import Counter
+from pathlib import Path
 import signal
 import subprocess
 import sys
 import tempfile
 import threading
 import time
-from collections import Counter
-from pathlib import Path
 
 import numpy as np
-
-from tools.bad_clouds import CASES, GoodCloud, good_cloud
+from tools.bad_clouds import CASES, good_cloud, GoodCloud
 
 NODE_NAME = 'pcrp_soak_node'
 
@@ -151,15 +150,14 @@ def camera_clouds(n: int) -> list[GoodCloud]:
 def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
         model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print,
         workers: int = 1) -> dict:
-    import rclpy
     from geometry_msgs.msg import PoseStamped
+    from pcrp_core import PCRP
+    from pcrp_ros.conversions import xyz_to_pointcloud2
+    import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import QoSProfile
     from sensor_msgs.msg import PointCloud2
     from std_msgs.msg import Header
-
-    from pcrp_core import PCRP
-    from pcrp_ros.conversions import xyz_to_pointcloud2
 
     model = PCRP.load(model_path)
     rng = np.random.default_rng(seed)

@@ -20,10 +20,9 @@ Poses map the object's frame into the camera's: p_camera = R @ p_object + t.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
-
 from pcrp_core.geometry import rotation_taking
 from pcrp_core.instance.signatures import ray_frame, shift_angle, shift_costs, signature
+from scipy.spatial import cKDTree
 
 
 def about(axis: np.ndarray, angles) -> np.ndarray:

@@ -29,13 +29,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
-
 from pcrp_core.instance import hypotheses
-from pcrp_core.instance.templates import Templates, shape_code
-from pcrp_core.instance.verification import Fit, Surface, judge, query_surface, visible_points
+from pcrp_core.instance.templates import shape_code, Templates
+from pcrp_core.instance.verification import Fit, judge, query_surface, Surface, visible_points
 from pcrp_core.registration.icp import icp_point_to_plane
 from pcrp_core.timing import Clock
+from scipy.spatial import cKDTree
 
 
 @dataclass

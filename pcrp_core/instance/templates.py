@@ -27,10 +27,9 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
-
 from pcrp_core.instance.signatures import ray_frame, signature
 from pcrp_core.preprocess import downsample
-from pcrp_core.sources.camera import Mesh, MeshCamera, PinholeCamera, look_at
+from pcrp_core.sources.camera import look_at, Mesh, MeshCamera, PinholeCamera
 from pcrp_core.visibility import sphere_directions
 
 

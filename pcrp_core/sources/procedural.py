@@ -28,9 +28,8 @@ IDs: `proc_<category>_<NNNN>` for the train split (seeds 0, 1, ...) and
 from __future__ import annotations
 
 import numpy as np
-
 from pcrp_core.sources.gallery_object import GalleryObject
-from pcrp_core.sources.primitives import ROT_X, ROT_Z, Box, Cylinder, Ellipsoid, sample_parts
+from pcrp_core.sources.primitives import Box, Cylinder, Ellipsoid, ROT_X, ROT_Z, sample_parts
 
 CATEGORIES = ('airplane', 'chair', 'sofa', 'car')
 TEST_SEED_OFFSET = 100_000

@@ -16,9 +16,8 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
-
 from pcrp_core.visibility import visible_from
+from scipy.spatial.transform import Rotation
 
 
 def random_rotation(rng: np.random.Generator) -> np.ndarray:

@@ -13,8 +13,8 @@
 # limitations under the License.
 
 """Bags: make-bag writes clouds with ground truth, process answers them into a results bag."""
-import numpy as np
 from helpers import PROCEDURAL_MODEL
+import numpy as np
 from pcrp_core import PCRP
 from pcrp_ros.bag_commands import make_bag, process_bag, summary
 from pcrp_ros.bags import CLOUD, POSE, read_bag
@@ -88,6 +88,7 @@ def test_a_recording_cut_short_keeps_its_whole_messages(tmp_path):
 def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path, capsys):
     import subprocess
     import sys
+
     from tools.robustness import mixed_bag
     bag = tmp_path / 'mixed'
     written = mixed_bag(bag)

@@ -15,13 +15,12 @@
 """A mesh gallery end to end: build (templates, calibration, twins), save, load, answer views."""
 import numpy as np
 import open3d as o3d
-import pytest
-
 from pcrp_core import PCRP
 from pcrp_core.evaluation.metrics import add_s
 from pcrp_core.evaluation.scenes import sample_scene
 from pcrp_core.sources.camera import Mesh
 from pcrp_core.sources.gallery_object import GalleryObject
+import pytest
 
 
 def _mesh(m) -> Mesh:

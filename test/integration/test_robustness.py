@@ -19,13 +19,12 @@ Whatever a segmenter sends: the core answers or refuses with a reason, never cra
 """
 import time
 
-import numpy as np
-import pytest
-from hypothesis import given, settings, strategies as st
-
 from helpers import PROCEDURAL_MODEL, rotation_error_deg
+from hypothesis import given, settings, strategies as st
+import numpy as np
 from pcrp_core import InvalidCloud, PCRP
 from pcrp_core.sources.procedural import generate_object
+import pytest
 
 
 @pytest.fixture(scope='module')

@@ -16,15 +16,14 @@
 import copy
 import json
 
-import numpy as np
-import pytest
-from scipy.spatial.transform import Rotation
-
 from helpers import PROCEDURAL_MODEL
-from pcrp_core import PCRP, ModelError
+import numpy as np
+from pcrp_core import ModelError, PCRP
 from pcrp_core.build import common_up
 from pcrp_core.sources import GalleryObject
 from pcrp_core.sources.procedural import generate_object
+import pytest
+from scipy.spatial.transform import Rotation
 
 
 @pytest.fixture(scope='module')

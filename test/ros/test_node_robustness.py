@@ -22,8 +22,8 @@ docs/results/ROBUSTNESS.md.
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
-import numpy as np
 from helpers import PROCEDURAL_MODEL
+import numpy as np
 from pcrp_core import ModelError, PCRP
 from pcrp_ros.conversions import xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode

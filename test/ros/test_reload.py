@@ -23,8 +23,8 @@ import threading
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
-import numpy as np
 from helpers import PROCEDURAL_MODEL
+import numpy as np
 from pcrp_core import PCRP
 from pcrp_core.model_io import ARRAYS_FILE
 from pcrp_ros import answering

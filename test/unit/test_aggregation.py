@@ -14,10 +14,9 @@
 
 """VLAD and max pooling: shapes, normalisation, order invariance."""
 import numpy as np
-import pytest
-
 from pcrp_core.gallery import Gallery
 from pcrp_core.vlad import VLAD
+import pytest
 
 
 @pytest.fixture(scope='module')

@@ -13,15 +13,14 @@
 # limitations under the License.
 
 """The feature stages on their own: invariance, reconstruction, determinism."""
-import numpy as np
-import pytest
-
 from helpers import MODELNET, modelnet, random_pose
+import numpy as np
 from pcrp_core.features import PointHop
 from pcrp_core.features.lrf import local_frames
 from pcrp_core.features.neighbours import knn
 from pcrp_core.features.saab import ChannelwiseSaab, Saab
 from pcrp_core.preprocess import farthest_point_sampling
+import pytest
 
 pytestmark = pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
 

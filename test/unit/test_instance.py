@@ -15,16 +15,16 @@
 """Known objects from a camera (pcrp_core/instance): each step on shapes whose answer is known."""
 import numpy as np
 import open3d as o3d
-import pytest
-from scipy.spatial.transform import Rotation
-
 from pcrp_core.confidence import expected_calibration_error, fit_calibration, reliability
 from pcrp_core.geometry import rotation_taking
 from pcrp_core.instance import hypotheses
-from pcrp_core.instance.signatures import SECTORS, ray_frame, shift_costs, signature
-from pcrp_core.instance.templates import Templates, object_templates, stack, TemplateSettings
-from pcrp_core.instance.verification import Surface, distances, judge, query_surface, visible_points
-from pcrp_core.sources.camera import Mesh, MeshCamera, look_at
+from pcrp_core.instance.signatures import ray_frame, SECTORS, shift_costs, signature
+from pcrp_core.instance.templates import object_templates, stack, Templates, TemplateSettings
+from pcrp_core.instance.verification import (distances, judge, query_surface, Surface,
+                                             visible_points)
+from pcrp_core.sources.camera import look_at, Mesh, MeshCamera
+import pytest
+from scipy.spatial.transform import Rotation
 
 SMALL = TemplateSettings(views=16, visibility_directions=128, surface_points=512, view_points=256)
 

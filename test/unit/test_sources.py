@@ -13,16 +13,15 @@
 # limitations under the License.
 
 """Where objects come from: the generator, ModelNet archives, the user's folders, sensor views."""
+from helpers import MODELNET
 import numpy as np
 import open3d as o3d
-import pytest
-from scipy.spatial import cKDTree
-
-from helpers import MODELNET
 from pcrp_core.sources import load_source, load_sources
 from pcrp_core.sources.procedural import CATEGORIES, generate_object
 from pcrp_core.sources.views import crop_half_plane, partial_view, random_rotation, sensor_view
 from pcrp_core.visibility import visible_from
+import pytest
+from scipy.spatial import cKDTree
 
 
 @pytest.mark.parametrize('category', CATEGORIES)
