@@ -47,26 +47,62 @@ def _fail(message: str) -> int:
 
 
 def register_build(sub) -> None:
-    p = sub.add_parser('build', help='build a gallery model from ModelNet40 archives, mesh/cloud folders or the generator',
-                       description='Build a model: fit FR-PointHop and the VLAD codebook on the gallery objects, '
-                                   'describe every object, and save the model directory.')
-    p.add_argument('sources', nargs='+', help='ModelNet40 archive (chair.npz), folder with one sub-folder per '
-                                              'category of meshes/clouds, or procedural[:N]')
+    p = sub.add_parser(
+        'build',
+        help='build a gallery model from ModelNet40 archives, mesh/cloud folders or the generator',
+        description='Build a model: fit FR-PointHop and the VLAD codebook on the gallery objects, '
+        'describe every object, and save the model directory.',
+    )
+    p.add_argument(
+        'sources',
+        nargs='+',
+        help='ModelNet40 archive (chair.npz), folder with one sub-folder per '
+        'category of meshes/clouds, or procedural[:N]',
+    )
     p.add_argument('--out', required=True, help='model directory to write')
-    p.add_argument('--split', default='train', choices=['train', 'test'], help='archive split (default train)')
-    p.add_argument('--n-points', type=int, default=1024, help='points per gallery object (default 1024)')
-    p.add_argument('--hop1', default='fpfh', choices=['fpfh', 'octant'],
-                   help='first-hop attribute: FPFH (FR-PointHop, default) or octant coordinates (R-PointHop)')
-    p.add_argument('--aggregation', default='vlad', choices=['vlad', 'max'], help='global descriptor (default vlad)')
+    p.add_argument(
+        '--split', default='train', choices=['train', 'test'], help='archive split (default train)'
+    )
+    p.add_argument(
+        '--n-points', type=int, default=1024, help='points per gallery object (default 1024)'
+    )
+    p.add_argument(
+        '--hop1',
+        default='fpfh',
+        choices=['fpfh', 'octant'],
+        help='first-hop attribute: FPFH (FR-PointHop, default) or octant coordinates (R-PointHop)',
+    )
+    p.add_argument(
+        '--aggregation',
+        default='vlad',
+        choices=['vlad', 'max'],
+        help='global descriptor (default vlad)',
+    )
     p.add_argument('--clusters', type=int, default=10, help='VLAD codebook size (default 10)')
-    p.add_argument('--views', type=int, default=0,
-                   help='also describe this many one-sided views per object, for depth-camera queries (default 0)')
-    p.add_argument('--limit', type=int, default=None, help='at most this many objects per source category')
+    p.add_argument(
+        '--views',
+        type=int,
+        default=0,
+        help='also describe this many one-sided views per object, for depth-camera queries '
+        '(default 0)',
+    )
+    p.add_argument(
+        '--limit', type=int, default=None, help='at most this many objects per source category'
+    )
     p.add_argument('--seed', type=int, default=0)
-    p.add_argument('--jobs', type=int, default=None, help='processes describing objects (default: one per core)')
-    p.add_argument('--up-axis', default=None, choices=['x', 'y', 'z', '-x', '-y', '-z'],
-                   help="the objects' up axis in their own frame, so queries may state which way is up "
-                        '(default: what the sources say: z for ModelNet40 and the generator, none for folders)')
+    p.add_argument(
+        '--jobs',
+        type=int,
+        default=None,
+        help='processes describing objects (default: one per core)',
+    )
+    p.add_argument(
+        '--up-axis',
+        default=None,
+        choices=['x', 'y', 'z', '-x', '-y', '-z'],
+        help="the objects' up axis in their own frame, so queries may state which way is up "
+        '(default: what the sources say: z for ModelNet40 and the generator, none for folders)',
+    )
     p.set_defaults(func=_build)
 
 
@@ -78,22 +114,46 @@ def _build(args) -> int:
 
     t0 = time.perf_counter()
     try:
-        objects = load_sources(args.sources, split=args.split, n_points=args.n_points, seed=args.seed,
-                               limit_per_category=args.limit)
+        objects = load_sources(
+            args.sources,
+            split=args.split,
+            n_points=args.n_points,
+            seed=args.seed,
+            limit_per_category=args.limit,
+        )
     except (OSError, ValueError) as e:
         return _fail(str(e))
-    print(f'{len(objects)} objects in {len(set(o.category for o in objects))} categories; fitting...', file=sys.stderr)
-    model = PCRP.build(objects, hop1=args.hop1, n_clusters=args.clusters, aggregation=args.aggregation,
-                       n_points=args.n_points, views=args.views, seed=args.seed, sources=args.sources, progress=_progress,
-                       n_jobs=args.jobs, up_axis=args.up_axis)
+    print(
+        f'{len(objects)} objects in {len({o.category for o in objects})} categories; fitting...',
+        file=sys.stderr,
+    )
+    model = PCRP.build(
+        objects,
+        hop1=args.hop1,
+        n_clusters=args.clusters,
+        aggregation=args.aggregation,
+        n_points=args.n_points,
+        views=args.views,
+        seed=args.seed,
+        sources=args.sources,
+        progress=_progress,
+        n_jobs=args.jobs,
+        up_axis=args.up_axis,
+    )
     model.save(args.out)
     size = model_size(args.out)
-    print(f"built {args.out}: {len(objects)} objects, categories {', '.join(model.categories)}, "
-          f'feature dimension {model.pointhop.n_features_}, descriptor dimension {model.gallery.vectors.shape[1]}, '
-          f'{time.perf_counter() - t0:.1f} s, {size / 1e6:.2f} MB on disk '
-          f'({model.size_report()}); '
-          + (f'up axis {axis_name(model.up_axis)}' if model.up_axis is not None
-             else 'no up axis recorded (--up-axis to give one)'))
+    print(
+        f"built {args.out}: {len(objects)} objects, categories {', '.join(model.categories)}, "
+        f'feature dimension {model.pointhop.n_features_}, '
+        f'descriptor dimension {model.gallery.vectors.shape[1]}, '
+        f'{time.perf_counter() - t0:.1f} s, {size / 1e6:.2f} MB on disk '
+        f'({model.size_report()}); '
+        + (
+            f'up axis {axis_name(model.up_axis)}'
+            if model.up_axis is not None
+            else 'no up axis recorded (--up-axis to give one)'
+        )
+    )
     return 0
 
 
@@ -102,17 +162,34 @@ def register_query(sub) -> None:
     p.add_argument('model', help="model directory ('default' for the shipped one)")
     p.add_argument('cloud', help='cloud file: PLY, PCD, XYZ or NPY (N, 3); meshes are sampled')
     p.add_argument('--json', action='store_true', help='print the result as JSON')
-    p.add_argument('--candidates', type=int, default=None, help='gallery objects to verify (n_candidates)')
-    p.add_argument('--min-confidence', type=float, default=None, help='reject answers less confident than this')
-    p.add_argument('--min-score', type=float, default=None, dest='min_confidence', help=argparse.SUPPRESS)
-    p.add_argument('--up', default=None, metavar='X,Y,Z',
-                   help="which way is up in the cloud's frame, if known: answers then keep the object upright "
-                        'within --up-tolerance')
+    p.add_argument(
+        '--candidates', type=int, default=None, help='gallery objects to verify (n_candidates)'
+    )
+    p.add_argument(
+        '--min-confidence',
+        type=float,
+        default=None,
+        help='reject answers less confident than this',
+    )
+    p.add_argument(
+        '--min-score', type=float, default=None, dest='min_confidence', help=argparse.SUPPRESS
+    )
+    p.add_argument(
+        '--up',
+        default=None,
+        metavar='X,Y,Z',
+        help="which way is up in the cloud's frame, if known: answers then keep the object "
+        'upright within --up-tolerance',
+    )
     p.add_argument('--up-tolerance', type=float, default=None, metavar='DEG',
                    help='how far an answer may tip the object from --up (default 60)')
-    p.add_argument('--viewpoint', default=None, metavar='X,Y,Z',
-                   help="where the sensor was in the cloud's frame, when the cloud is one sensor's view "
-                        "(0,0,0 for a cloud in the camera's own frame, as a depth driver publishes it)")
+    p.add_argument(
+        '--viewpoint',
+        default=None,
+        metavar='X,Y,Z',
+        help="where the sensor was in the cloud's frame, when the cloud is one sensor's view "
+        "(0,0,0 for a cloud in the camera's own frame, as a depth driver publishes it)",
+    )
     p.set_defaults(func=_query)
 
 
@@ -128,8 +205,15 @@ def _query(args) -> int:
         points = read_points(args.cloud)
     except (OSError, ValueError) as e:
         return _fail(f'{args.cloud}: {e}')
-    opts = {k: v for k, v in (('n_candidates', args.candidates), ('min_confidence', args.min_confidence),
-                              ('up_tolerance_deg', args.up_tolerance)) if v is not None}
+    opts = {
+        k: v
+        for k, v in (
+            ('n_candidates', args.candidates),
+            ('min_confidence', args.min_confidence),
+            ('up_tolerance_deg', args.up_tolerance),
+        )
+        if v is not None
+    }
     try:
         up = parse_up(args.up)
         viewpoint = parse_up(args.viewpoint, '--viewpoint')
@@ -145,27 +229,56 @@ def _query(args) -> int:
 
 
 def register_eval(sub) -> None:
-    p = sub.add_parser('eval', help='how good a model is on your own meshes, seen by a simulated depth camera',
-                       description='Render seeded depth-camera views of every mesh in a folder (metres; 640x480, '
-                                   'f=600, range noise growing with depth; perfectly segmented), answer them with the '
-                                   'model as the node would, and print per-family and overall rates: right object, '
-                                   'pose right (ADD-S < 10 % of the diameter), ADD-S AUC, error medians, wrong answers '
-                                   'accepted, right ones rejected, time per view.')
-    p.add_argument('meshes', help='folder of meshes in metres, as given to `pcrp build` (one object per file, or '
-                                  'one sub-folder per category)')
+    p = sub.add_parser(
+        'eval',
+        help='how good a model is on your own meshes, seen by a simulated depth camera',
+        description='Render seeded depth-camera views of every mesh in a folder (metres; 640x480, '
+        'f=600, range noise growing with depth; perfectly segmented), answer them with the '
+        'model as the node would, and print per-family and overall rates: right object, '
+        'pose right (ADD-S < 10 % of the diameter), ADD-S AUC, error medians, wrong answers '
+        'accepted, right ones rejected, time per view.',
+    )
+    p.add_argument(
+        'meshes',
+        help='folder of meshes in metres, as given to `pcrp build` (one object per file, or '
+        'one sub-folder per category)',
+    )
     p.add_argument('--model', required=True,
                    help="model directory built from those meshes ('default' for the shipped one)")
-    p.add_argument('--views-per-object', type=int, default=2, help='views drawn per mesh (default 2)')
-    p.add_argument('--kind', default='free', choices=['free', 'table'],
-                   help='free: any orientation in front of the camera; table: standing on its z axis, the camera '
-                        'looking down at 25-65 degrees (default free)')
-    p.add_argument('--occlusion', action='store_true', help="a box or cylinder hides 20-60 %% of each object's pixels")
-    p.add_argument('--up', action='store_true',
-                   help="tell the model which way is up (the table's normal); needs --kind table and a model "
-                        'built with --up-axis')
-    p.add_argument('--seed', type=int, default=0, help='seed of the views (default 0); views of seed S are the same '
-                                                       'whatever else is drawn')
-    p.add_argument('--json', default=None, metavar='FILE', help='also write the summary and per-view records here')
+    p.add_argument(
+        '--views-per-object', type=int, default=2, help='views drawn per mesh (default 2)'
+    )
+    p.add_argument(
+        '--kind',
+        default='free',
+        choices=['free', 'table'],
+        help='free: any orientation in front of the camera; table: standing on its z axis, the '
+        'camera looking down at 25-65 degrees (default free)',
+    )
+    p.add_argument(
+        '--occlusion',
+        action='store_true',
+        help="a box or cylinder hides 20-60 %% of each object's pixels",
+    )
+    p.add_argument(
+        '--up',
+        action='store_true',
+        help="tell the model which way is up (the table's normal); needs --kind table and a model "
+        'built with --up-axis',
+    )
+    p.add_argument(
+        '--seed',
+        type=int,
+        default=0,
+        help='seed of the views (default 0); views of seed S are the same '
+        'whatever else is drawn',
+    )
+    p.add_argument(
+        '--json',
+        default=None,
+        metavar='FILE',
+        help='also write the summary and per-view records here',
+    )
     p.set_defaults(func=_eval)
 
 
@@ -195,27 +308,48 @@ def _eval(args) -> int:
     meshes = {o.gallery_id: o.mesh for o in objects if o.mesh is not None}
     skipped = [o.gallery_id for o in objects if o.mesh is None]
     if skipped:
-        print(f"pcrp eval: {len(skipped)} clouds skipped (a view is rendered from a mesh): {', '.join(skipped[:5])}",
-              file=sys.stderr)
+        print(
+            f'pcrp eval: {len(skipped)} clouds skipped (a view is rendered from a mesh): '
+            f"{', '.join(skipped[:5])}",
+            file=sys.stderr,
+        )
     if not meshes:
         return _fail(f'{args.meshes}: no meshes to render')
     unknown = [g for g in meshes if g not in model.gallery.index]
     if unknown:
-        print(f"pcrp eval: {len(unknown)} of the meshes are not in the model's gallery, so can never be named: "
-              f"{', '.join(unknown[:5])}", file=sys.stderr)
+        print(
+            f"pcrp eval: {len(unknown)} of the meshes are not in the model's gallery, "
+            'so can never be named: '
+            f"{', '.join(unknown[:5])}",
+            file=sys.stderr,
+        )
     try:
-        scenes = sample_scenes(meshes, args.views_per_object, args.kind, args.occlusion, args.seed, progress=_progress)
+        scenes = sample_scenes(
+            meshes, args.views_per_object, args.kind, args.occlusion, args.seed, progress=_progress
+        )
     except RuntimeError as e:
         return _fail(str(e))
     rows = evaluate(model, scenes, meshes, use_up=args.up, progress=_progress)
     summary = summarise(rows)
-    print(f"{len(rows)} {args.kind}{' occluded' if args.occlusion else ''} views of {len(meshes)} meshes, seed "
-          f"{args.seed}{', up given' if args.up else ''}; model {args.model}")
+    print(
+        f"{len(rows)} {args.kind}{' occluded' if args.occlusion else ''} views of "
+        f'{len(meshes)} meshes, seed '
+        f"{args.seed}{', up given' if args.up else ''}; model {args.model}"
+    )
     print(format_summary(summary))
     if args.json:
         with open(args.json, 'w') as f:
-            json.dump(jsonable({'settings': {k: v for k, v in vars(args).items() if k != 'func'}, 'summary': summary,
-                                'records': rows}), f, indent=1)
+            json.dump(
+                jsonable(
+                    {
+                        'settings': {k: v for k, v in vars(args).items() if k != 'func'},
+                        'summary': summary,
+                        'records': rows,
+                    }
+                ),
+                f,
+                indent=1,
+            )
     return 0
 
 
@@ -239,22 +373,32 @@ def parse_up(text, option: str = '--up'):
 def format_result(r) -> str:
     import numpy as np
 
-    rows = [f'gallery_id  {r.gallery_id}', f'category    {r.category}',
-            f"status      {'REJECTED: ' + r.reason if r.rejected else 'accepted'}",
-            f'confidence  {r.confidence:.3f}',
-            f'score       {r.score:.3f} (fitness {r.fitness:.3f}, inlier rmse {r.inlier_rmse:.4g}, chamfer {r.chamfer:.4f})',
-            f'scale       {r.scale:.4f}',
-            'rotation    ' + np.array2string(np.asarray(r.rotation), precision=4, suppress_small=True,
-                                             prefix='            '),
-            'translation ' + np.array2string(np.asarray(r.translation), precision=4, suppress_small=True),
-            'quaternion  (x, y, z, w) ' + np.array2string(r.quaternion, precision=4, suppress_small=True),
-            'candidates  ' + ', '.join(f'{g} ({d:.3f})' for g, d in r.candidates[:5]),
-            'timings ms  ' + ', '.join(f'{k} {v * 1000:.1f}' for k, v in r.timings.items())]
+    rows = [
+        f'gallery_id  {r.gallery_id}',
+        f'category    {r.category}',
+        f"status      {'REJECTED: ' + r.reason if r.rejected else 'accepted'}",
+        f'confidence  {r.confidence:.3f}',
+        f'score       {r.score:.3f} (fitness {r.fitness:.3f}, inlier rmse {r.inlier_rmse:.4g}, '
+        f'chamfer {r.chamfer:.4f})',
+        f'scale       {r.scale:.4f}',
+        'rotation    '
+        + np.array2string(
+            np.asarray(r.rotation), precision=4, suppress_small=True, prefix='            '
+        ),
+        'translation '
+        + np.array2string(np.asarray(r.translation), precision=4, suppress_small=True),
+        'quaternion  (x, y, z, w) '
+        + np.array2string(r.quaternion, precision=4, suppress_small=True),
+        'candidates  ' + ', '.join(f'{g} ({d:.3f})' for g, d in r.candidates[:5]),
+        'timings ms  ' + ', '.join(f'{k} {v * 1000:.1f}' for k, v in r.timings.items()),
+    ]
     return '\n'.join(rows)
 
 
 def build_parser(extensions=()) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog='pcrp', description='PCRP point cloud object retrieval and pose estimation')
+    parser = argparse.ArgumentParser(
+        prog='pcrp', description='PCRP point cloud object retrieval and pose estimation'
+    )
     sub = parser.add_subparsers(dest='command', required=True)
     for register in (register_build, register_query, register_eval, *extensions):
         register(sub)

@@ -45,19 +45,30 @@ class Calibration:
         return float(1.0 / (1.0 + np.exp(-np.clip(z, -50.0, 50.0))))
 
     def to_arrays(self, prefix: str) -> dict:
-        return {prefix + 'names': np.array(self.names), prefix + 'mean': self.mean, prefix + 'scale': self.scale,
-                prefix + 'coef': self.coef, prefix + 'intercept': np.array(self.intercept)}
+        return {
+            prefix + 'names': np.array(self.names),
+            prefix + 'mean': self.mean,
+            prefix + 'scale': self.scale,
+            prefix + 'coef': self.coef,
+            prefix + 'intercept': np.array(self.intercept),
+        }
 
     @classmethod
     def from_arrays(cls, arrays: dict, prefix: str) -> 'Calibration | None':
         if prefix + 'coef' not in arrays:
             return None
-        return cls(tuple(str(n) for n in arrays[prefix + 'names']), arrays[prefix + 'mean'].astype(np.float64),
-                   arrays[prefix + 'scale'].astype(np.float64), arrays[prefix + 'coef'].astype(np.float64),
-                   float(arrays[prefix + 'intercept']))
+        return cls(
+            tuple(str(n) for n in arrays[prefix + 'names']),
+            arrays[prefix + 'mean'].astype(np.float64),
+            arrays[prefix + 'scale'].astype(np.float64),
+            arrays[prefix + 'coef'].astype(np.float64),
+            float(arrays[prefix + 'intercept']),
+        )
 
 
-def fit_calibration(samples: list[dict], labels, names: tuple, regularisation: float = 1.0) -> Calibration:
+def fit_calibration(
+    samples: list[dict], labels, names: tuple, regularisation: float = 1.0
+) -> Calibration:
     """Logistic regression of labels (1: the answer was right) on the named features."""
     from sklearn.linear_model import LogisticRegression
 
@@ -68,7 +79,9 @@ def fit_calibration(samples: list[dict], labels, names: tuple, regularisation: f
     mean, scale = X.mean(axis=0), X.std(axis=0)
     scale = np.where(scale > 1e-12, scale, 1.0)
     lr = LogisticRegression(C=regularisation, max_iter=1000).fit((X - mean) / scale, y)
-    return Calibration(tuple(names), mean, scale, lr.coef_[0].astype(np.float64), float(lr.intercept_[0]))
+    return Calibration(
+        tuple(names), mean, scale, lr.coef_[0].astype(np.float64), float(lr.intercept_[0])
+    )
 
 
 def reliability(confidence, right, bins: int = 10) -> list[tuple[float, float, int]]:

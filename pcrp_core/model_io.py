@@ -59,9 +59,13 @@ def write_model(path, meta: dict, arrays: dict) -> Path:
 def read_model(path) -> tuple[dict, dict]:
     path = Path(path)
     if not path.exists():
-        raise ModelError(f'{path}: no such model (expected a directory with {META_FILE} and {ARRAYS_FILE})')
+        raise ModelError(
+            f'{path}: no such model (expected a directory with {META_FILE} and {ARRAYS_FILE})'
+        )
     if path.is_file():
-        raise ModelError(f'{path}: a model is a directory holding {META_FILE} and {ARRAYS_FILE}, not a file')
+        raise ModelError(
+            f'{path}: a model is a directory holding {META_FILE} and {ARRAYS_FILE}, not a file'
+        )
     meta_path, arrays_path = path / META_FILE, path / ARRAYS_FILE
     for p in (meta_path, arrays_path):
         if not p.is_file():
@@ -71,12 +75,19 @@ def read_model(path) -> tuple[dict, dict]:
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
         raise ModelError(f'{meta_path}: unreadable model metadata ({e})') from None
     if not isinstance(meta, dict) or meta.get('format') != FORMAT:
-        raise ModelError(f"{meta_path}: not a pcrp model (format field is {meta.get('format') if isinstance(meta, dict) else None!r})")
+        raise ModelError(
+            f'{meta_path}: not a pcrp model (format field is '
+            f"{meta.get('format') if isinstance(meta, dict) else None!r})"
+        )
     if meta.get('format_version') != FORMAT_VERSION:
-        raise ModelError(f"{meta_path}: model format version {meta.get('format_version')!r}, "
-                         f'this pcrp reads version {FORMAT_VERSION}; rebuild the model with `pcrp build`')
+        raise ModelError(
+            f"{meta_path}: model format version {meta.get('format_version')!r}, "
+            f'this pcrp reads version {FORMAT_VERSION}; rebuild the model with `pcrp build`'
+        )
     if _sha256(arrays_path) != meta.get('arrays_sha256'):
-        raise ModelError(f'{arrays_path}: checksum does not match {META_FILE} (truncated or modified)')
+        raise ModelError(
+            f'{arrays_path}: checksum does not match {META_FILE} (truncated or modified)'
+        )
     try:
         with np.load(arrays_path, allow_pickle=False) as npz:
             arrays = {k: npz[k] for k in npz.files}

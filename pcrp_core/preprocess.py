@@ -25,7 +25,9 @@ def finite_points(points) -> np.ndarray:
     """(N, 3) float64 of the rows with all-finite coordinates; refuses what is not a cloud."""
     arr = np.asarray(points)
     if arr.ndim != 2 or arr.shape[1] != 3:
-        raise InvalidCloud('bad_shape', f'expected an (N, 3) array of points, got shape {arr.shape}')
+        raise InvalidCloud(
+            'bad_shape', f'expected an (N, 3) array of points, got shape {arr.shape}'
+        )
     if not np.issubdtype(arr.dtype, np.number):
         raise InvalidCloud('bad_shape', f'expected numeric points, got dtype {arr.dtype}')
     arr = arr.astype(np.float64, copy=False)
@@ -90,14 +92,20 @@ def downsample(points: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray
 def check_geometry(points: np.ndarray, min_points: int) -> None:
     """Refuse clouds no pose can be read from, with a reason the node counts."""
     if len(points) < min_points:
-        raise InvalidCloud('too_few_points', f'{len(points)} finite points, at least {min_points} needed')
+        raise InvalidCloud(
+            'too_few_points', f'{len(points)} finite points, at least {min_points} needed'
+        )
     unique = np.unique(np.round(points, 9), axis=0)
     if len(unique) < min_points:
-        raise InvalidCloud('too_few_points', f'only {len(unique)} distinct points, at least {min_points} needed')
+        raise InvalidCloud(
+            'too_few_points', f'only {len(unique)} distinct points, at least {min_points} needed'
+        )
     centred = unique - unique.mean(axis=0)
     sv = np.linalg.svd(centred, compute_uv=False)
     if sv[0] <= 0 or sv[1] / sv[0] < 1e-3:
-        raise InvalidCloud('degenerate', 'points are (nearly) all equal or on a line; no pose can be read')
+        raise InvalidCloud(
+            'degenerate', 'points are (nearly) all equal or on a line; no pose can be read'
+        )
 
 
 def clean(points, max_points: int, min_points: int, seed: int = 0) -> np.ndarray:

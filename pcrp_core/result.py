@@ -38,11 +38,13 @@ class PoseResult:
     confidence: float = 0.0       # how likely the answer is right, in [0, 1]
     fitness: float = 0.0          # share of query points near the aligned gallery object
     inlier_rmse: float = float('inf')  # RMS distance of those points, query units
-    chamfer: float = float('inf')      # symmetric-free one-way chamfer, query -> gallery, normalised units
+    # symmetric-free one-way chamfer, query -> gallery, normalised units
+    chamfer: float = float('inf')
     rejected: bool = False
     reason: str = ''              # why it was rejected; empty when accepted
     candidates: tuple = ()        # retrieval top-k as ((gallery_id, distance), ...)
-    twins: tuple = ()             # gallery objects of the same shape as the answer: no depth camera tells them apart
+    # gallery objects of the same shape as the answer: no depth camera tells them apart
+    twins: tuple = ()
     timings: dict = field(default_factory=dict)  # seconds per stage, plus "total"
     n_points: int = 0             # points used after cleaning and downsampling
 

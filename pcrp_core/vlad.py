@@ -56,12 +56,18 @@ class VLAD:
         """(k * D,) VLAD vector, or (D,) max-pooled vector, of one cloud's point features."""
         if self.aggregation == 'max':
             return _l2(features.max(axis=0))
-        d2 = (features ** 2).sum(1)[:, None] - 2 * features @ self.codebook_.T + (self.codebook_ ** 2).sum(1)[None]
+        d2 = (
+            (features**2).sum(1)[:, None]
+            - 2 * features @ self.codebook_.T
+            + (self.codebook_**2).sum(1)[None]
+        )
         nearest = np.argmin(d2, axis=1)
         # sum of residuals per codeword = (sum of its features) - (its count) * codeword, the
         # sums as one product with the assignment matrix (np.add.at is ~50x slower)
         assign = np.zeros((len(features), len(self.codebook_)))
         assign[np.arange(len(features)), nearest] = 1.0
-        residual_sums = assign.T @ features.astype(np.float64) - assign.sum(0)[:, None] * self.codebook_
+        residual_sums = (
+            assign.T @ features.astype(np.float64) - assign.sum(0)[:, None] * self.codebook_
+        )
         v = np.sign(residual_sums) * np.sqrt(np.abs(residual_sums))
         return _l2(_l2(v, axis=1).ravel()).astype(np.float32)

@@ -51,7 +51,10 @@ def small_model(tmp_path_factory):
     objects = []
     for category in ('chair', 'sofa', 'airplane'):
         points, names = modelnet(category, 'train', 40)
-        objects += [SimpleNamespace(gallery_id=n, category=category, points=p) for n, p in zip(names, points)]
+        objects += [
+            SimpleNamespace(gallery_id=n, category=category, points=p)
+            for n, p in zip(names, points)
+        ]
     path = tmp_path_factory.mktemp('model') / 'small'
     PCRP.build(objects, seed=0, sources=['modelnet40 test subset']).save(path)
     return path

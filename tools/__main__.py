@@ -24,8 +24,11 @@ from tools.paper_eval import command as paper_eval
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m tools', description="pcrp's experiments, benchmarks and "
-                                     'fault batteries (run from a checkout; not installed)')
+    parser = argparse.ArgumentParser(
+        prog='python -m tools',
+        description="pcrp's experiments, benchmarks and "
+        'fault batteries (run from a checkout; not installed)',
+    )
     sub = parser.add_subparsers(dest='command', required=True)
     for register in (paper_eval.register_eval, bench.register, robustness.register, soak.register,
                      robot_report.register):

@@ -33,7 +33,8 @@ from pcrp_core.sources.views import random_rotation, sensor_view
 from pcrp_ros.conversions import FLOAT32, xyz_to_pointcloud2
 
 ANSWERED = 'answered'        # pose published, with the right gallery ID and a small rotation error
-ANY_ANSWER = 'answered_any'  # pose published; no ground truth to hold it to (units unknown to the model)
+# pose published; no ground truth to hold it to (units unknown to the model)
+ANY_ANSWER = 'answered_any'
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ class Case:
     name: str
     what: str
     make: Callable[[GoodCloud, object], object]     # (good cloud, header) -> PointCloud2
-    allowed: frozenset                              # outcomes: ANSWERED, ANY_ANSWER or "rejected:<reason>"
+    allowed: frozenset  # outcomes: ANSWERED, ANY_ANSWER or "rejected:<reason>"
 
 
 def good_cloud(model, seed: int = 3, gallery_index: int = 0) -> GoodCloud:
@@ -60,10 +61,12 @@ def good_cloud(model, seed: int = 3, gallery_index: int = 0) -> GoodCloud:
     radius = float(np.linalg.norm(pts, axis=1).max())
     R = random_rotation(rng)
     posed = pts @ R.T + [0.1 * radius, -0.1 * radius, 3.0 * radius]
-    return GoodCloud(sensor_view(posed, np.zeros(3), rng, 0.003 * radius).astype(np.float64), gid, R)
+    return GoodCloud(
+        sensor_view(posed, np.zeros(3), rng, 0.003 * radius).astype(np.float64), gid, R
+    )
 
 
-# -- builders ---------------------------------------------------------------------------------------
+# -- builders -------------------------------------------------------------------------------------
 def _msg(points, header, dtype=np.float32, extra=None):
     return xyz_to_pointcloud2(points, header, dtype, extra)
 
@@ -83,7 +86,13 @@ def _organised_with_holes(g, h):
     slots = np.sort(rng.choice(len(grid), n, replace=False))
     grid[slots] = g.points
     msg = _msg(grid, h)
-    return _with(msg, height=len(grid) // width, width=width, row_step=msg.point_step * width, is_dense=False)
+    return _with(
+        msg,
+        height=len(grid) // width,
+        width=width,
+        row_step=msg.point_step * width,
+        is_dense=False,
+    )
 
 
 def _big_endian(g, h):
@@ -96,14 +105,25 @@ def _reordered_with_extras(g, h):
     # rgb and intensity first, then z, x, y: readers must go by field name and offset, not position
     from sensor_msgs.msg import PointField
     n = len(g.points)
-    rec = np.zeros(n, dtype=[('rgb', '<u4'), ('intensity', '<f4'), ('z', '<f4'), ('x', '<f4'), ('y', '<f4')])
+    rec = np.zeros(
+        n, dtype=[('rgb', '<u4'), ('intensity', '<f4'), ('z', '<f4'), ('x', '<f4'), ('y', '<f4')]
+    )
     rec['x'], rec['y'], rec['z'] = g.points.T
     rec['intensity'] = 1.0
     rec['rgb'] = 0xFF8800
     msg = _msg(g.points, h)
-    fields = [PointField(name=name, offset=rec.dtype.fields[name][1], datatype=FLOAT32 if name != 'rgb' else 7, count=1)
-              for name in rec.dtype.names]
-    return _with(msg, fields=fields, point_step=rec.itemsize, row_step=rec.itemsize * n, data=rec.tobytes())
+    fields = [
+        PointField(
+            name=name,
+            offset=rec.dtype.fields[name][1],
+            datatype=FLOAT32 if name != 'rgb' else 7,
+            count=1,
+        )
+        for name in rec.dtype.names
+    ]
+    return _with(
+        msg, fields=fields, point_step=rec.itemsize, row_step=rec.itemsize * n, data=rec.tobytes()
+    )
 
 
 def _padded_rows(g, h):
@@ -111,9 +131,13 @@ def _padded_rows(g, h):
     width = 16
     n -= n % width
     msg = _msg(g.points[:n], h)
-    rows = np.frombuffer(bytes(msg.data), dtype=np.uint8).reshape(n // width, width * msg.point_step)
+    rows = np.frombuffer(bytes(msg.data), dtype=np.uint8).reshape(
+        n // width, width * msg.point_step
+    )
     padded = np.concatenate([rows, np.zeros((len(rows), 8), np.uint8)], axis=1)
-    return _with(msg, height=len(rows), width=width, row_step=padded.shape[1], data=padded.tobytes())
+    return _with(
+        msg, height=len(rows), width=width, row_step=padded.shape[1], data=padded.tobytes()
+    )
 
 
 def _integer(g, h, dtype, scale):
@@ -155,7 +179,12 @@ def _degenerate(kind):
         if kind == 'line':
             return _msg(c + s * [1.0, 0.5, 0.2], h)
         rng = np.random.default_rng(0)
-        return _msg(c + rng.uniform(-0.2, 0.2, (500, 1)) * [1, 0, 0] + rng.uniform(-0.2, 0.2, (500, 1)) * [0, 1, 0.3], h)
+        return _msg(
+            c
+            + rng.uniform(-0.2, 0.2, (500, 1)) * [1, 0, 0]
+            + rng.uniform(-0.2, 0.2, (500, 1)) * [0, 1, 0.3],
+            h,
+        )
     return make
 
 
@@ -168,35 +197,103 @@ _UNITS = frozenset({ANY_ANSWER, 'rejected:low_confidence'})
 _SHAPELESS = frozenset({ANY_ANSWER, 'rejected:low_confidence', 'rejected:degenerate'})
 
 CASES = [
-    Case('empty', 'no points (width 0)', lambda g, h: _msg(np.zeros((0, 3)), h), _rejected('empty')),
-    Case('too_few', '5 points, fewer than min_points', lambda g, h: _msg(g.points[:5], h), _rejected('too_few_points')),
-    Case('all_nan', 'every coordinate NaN', lambda g, h: _msg(np.full((300, 3), np.nan), h), _rejected('no_finite_points')),
-    Case('all_inf', 'every coordinate +-Inf', lambda g, h: _msg(np.full((300, 3), np.inf) * [1, -1, 1], h),
-         _rejected('no_finite_points')),
-    Case('nan_holes', 'organised 32-wide, a third NaN holes, is_dense false', _organised_with_holes, _ANSWER),
-    Case('missing_z', 'no z field', lambda g, h: _with(_msg(g.points, h), fields=_msg(g.points, h).fields[:2]),
-         _rejected('missing_field')),
-    Case('unknown_datatype', 'x of PointField datatype 42', lambda g, h: _bad_datatype(g, h), _rejected('bad_field_type')),
-    Case('float64', 'x, y, z as float64', lambda g, h: _msg(g.points, h, dtype=np.float64), _ANSWER),
-    Case('int16_mm', 'x, y, z as int16 millimetres', lambda g, h: _integer(g, h, np.int16, 1000.0), _UNITS),
-    Case('uint8', 'x, y, z as uint8 (whole units)', lambda g, h: _integer(g, h, np.uint8, 1.0),
-         _rejected('too_few_points', 'degenerate')),
+    Case(
+        'empty', 'no points (width 0)', lambda g, h: _msg(np.zeros((0, 3)), h), _rejected('empty')
+    ),
+    Case(
+        'too_few',
+        '5 points, fewer than min_points',
+        lambda g, h: _msg(g.points[:5], h),
+        _rejected('too_few_points'),
+    ),
+    Case(
+        'all_nan',
+        'every coordinate NaN',
+        lambda g, h: _msg(np.full((300, 3), np.nan), h),
+        _rejected('no_finite_points'),
+    ),
+    Case(
+        'all_inf',
+        'every coordinate +-Inf',
+        lambda g, h: _msg(np.full((300, 3), np.inf) * [1, -1, 1], h),
+        _rejected('no_finite_points'),
+    ),
+    Case(
+        'nan_holes',
+        'organised 32-wide, a third NaN holes, is_dense false',
+        _organised_with_holes,
+        _ANSWER,
+    ),
+    Case(
+        'missing_z',
+        'no z field',
+        lambda g, h: _with(_msg(g.points, h), fields=_msg(g.points, h).fields[:2]),
+        _rejected('missing_field'),
+    ),
+    Case(
+        'unknown_datatype',
+        'x of PointField datatype 42',
+        lambda g, h: _bad_datatype(g, h),
+        _rejected('bad_field_type'),
+    ),
+    Case(
+        'float64', 'x, y, z as float64', lambda g, h: _msg(g.points, h, dtype=np.float64), _ANSWER
+    ),
+    Case(
+        'int16_mm',
+        'x, y, z as int16 millimetres',
+        lambda g, h: _integer(g, h, np.int16, 1000.0),
+        _UNITS,
+    ),
+    Case(
+        'uint8',
+        'x, y, z as uint8 (whole units)',
+        lambda g, h: _integer(g, h, np.uint8, 1.0),
+        _rejected('too_few_points', 'degenerate'),
+    ),
     Case('big_endian', 'float32, big-endian data', _big_endian, _ANSWER),
     Case('extra_fields', 'rgb and intensity first, then z, x, y', _reordered_with_extras, _ANSWER),
-    Case('point_step_small', 'point_step smaller than the fields need',
-         lambda g, h: _with(_msg(g.points, h), point_step=8), _rejected('bad_layout')),
-    Case('data_short', 'data shorter than row_step x height',
-         lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data)[:1000]), _rejected('truncated_data')),
-    Case('data_long', 'data 100 bytes longer than row_step x height',
-         lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data) + bytes(100)), _ANSWER),
-    Case('row_step_small', 'row_step less than width x point_step',
-         lambda g, h: _with(_msg(g.points, h), row_step=12), _rejected('bad_layout')),
+    Case(
+        'point_step_small',
+        'point_step smaller than the fields need',
+        lambda g, h: _with(_msg(g.points, h), point_step=8),
+        _rejected('bad_layout'),
+    ),
+    Case(
+        'data_short',
+        'data shorter than row_step x height',
+        lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data)[:1000]),
+        _rejected('truncated_data'),
+    ),
+    Case(
+        'data_long',
+        'data 100 bytes longer than row_step x height',
+        lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data) + bytes(100)),
+        _ANSWER,
+    ),
+    Case(
+        'row_step_small',
+        'row_step less than width x point_step',
+        lambda g, h: _with(_msg(g.points, h), row_step=12),
+        _rejected('bad_layout'),
+    ),
     Case('row_padding', 'organised, 8 bytes of padding after each row', _padded_rows, _ANSWER),
     Case('million_points', '1,000,000 points', _million, _ANSWER),
-    Case('one_km', 'the object 1 km from the camera (float64)',
-         lambda g, h: _msg(g.points + [0.0, 0.0, 1000.0], h, dtype=np.float64), _ANSWER),
-    Case('millimetres', 'float32 millimetres (model in metres)', lambda g, h: _msg(g.points * 1000.0, h), _UNITS),
-    Case('all_equal', '500 copies of one point', _degenerate('equal'), _rejected('too_few_points')),
+    Case(
+        'one_km',
+        'the object 1 km from the camera (float64)',
+        lambda g, h: _msg(g.points + [0.0, 0.0, 1000.0], h, dtype=np.float64),
+        _ANSWER,
+    ),
+    Case(
+        'millimetres',
+        'float32 millimetres (model in metres)',
+        lambda g, h: _msg(g.points * 1000.0, h),
+        _UNITS,
+    ),
+    Case(
+        'all_equal', '500 copies of one point', _degenerate('equal'), _rejected('too_few_points')
+    ),
     Case('line', '500 points on a line', _degenerate('line'), _rejected('degenerate')),
     Case('plane', '500 points on a plane', _degenerate('plane'), _SHAPELESS),
     Case('duplicated', 'every point sent twice', _duplicated, _ANSWER),
@@ -212,7 +309,7 @@ def _bad_datatype(g, h):
     return _with(msg, fields=fields)
 
 
-# -- running them through a live node ---------------------------------------------------------------
+# -- running them through a live node -------------------------------------------------------------
 @dataclass
 class Outcome:
     case: str
@@ -238,7 +335,14 @@ class CaseRunner:
     nothing).
     """
 
-    def __init__(self, node, client, good: GoodCloud, topic: str = 'segmented_object', max_error: float = 10.0):
+    def __init__(
+        self,
+        node,
+        client,
+        good: GoodCloud,
+        topic: str = 'segmented_object',
+        max_error: float = 10.0,
+    ):
         from geometry_msgs.msg import PoseStamped
         from rclpy.qos import QoSProfile
         from sensor_msgs.msg import PointCloud2
@@ -249,7 +353,8 @@ class CaseRunner:
         self.poses, self.ids = [], []
         client.create_subscription(PoseStamped, f'/{topic}/pose', self.poses.append, 10)
         client.create_subscription(String, f'/{topic}/gallery_id', self.ids.append, 10)
-        # reliable, so a big cloud is not lost to fragmentation; the node's best-effort input accepts it
+        # reliable, so a big cloud is not lost to fragmentation; the node's best-effort input
+        # accepts it
         self.pub = client.create_publisher(PointCloud2, f'/{topic}', QoSProfile(depth=2))
         self._sec = 1
 
@@ -264,7 +369,10 @@ class CaseRunner:
         while time.monotonic() < end and not self.pub.get_subscription_count():
             time.sleep(0.05)
         while time.monotonic() < end:
-            if self.send(lambda g, h: xyz_to_pointcloud2(g.points, h), timeout=3.0).outcome == ANSWERED:
+            if (
+                self.send(lambda g, h: xyz_to_pointcloud2(g.points, h), timeout=3.0).outcome
+                == ANSWERED
+            ):
                 return self._settled(end)
         return False
 
@@ -302,11 +410,17 @@ class CaseRunner:
             end = time.monotonic() + 5.0
             while len(self.poses) <= n_poses and time.monotonic() < end:
                 time.sleep(0.02)
-            pose = next((p for p in self.poses[n_poses:] if p.header.stamp.sec == header.stamp.sec), None)
+            pose = next(
+                (p for p in self.poses[n_poses:] if p.header.stamp.sec == header.stamp.sec), None
+            )
             while len(self.ids) < len(self.poses) and time.monotonic() < end:
                 time.sleep(0.02)
             gid = self.ids[-1].data if self.ids else ''
-            err = _rotation_error(pose.pose.orientation, self.good.rotation) if pose is not None else float('nan')
+            err = (
+                _rotation_error(pose.pose.orientation, self.good.rotation)
+                if pose is not None
+                else float('nan')
+            )
             right = gid == self.good.gallery_id and err <= self.max_error
             return Outcome('', ANSWERED if right else ANY_ANSWER, seconds, gid, err)
         reasons = {r for r, v in self.stats.rejections.items() if v > before[1].get(r, 0)}

@@ -45,7 +45,11 @@ CLOUD_SIZES = (1000, 3000, 10000, 30000, 100000)
 
 def _pct(seconds) -> dict:
     s = np.asarray(seconds, dtype=np.float64) * 1e3
-    return {'median_ms': float(np.median(s)), 'p95_ms': float(np.percentile(s, 95)), 'n': int(len(s))}
+    return {
+        'median_ms': float(np.median(s)),
+        'p95_ms': float(np.percentile(s, 95)),
+        'n': int(len(s)),
+    }
 
 
 def _rss_mb() -> float:
@@ -58,8 +62,22 @@ def ycb_model(ycb: Path, cache: Path) -> tuple[str, dict]:
     info = cache / 'ycb_build.json'
     if not (path / 'model.json').exists() or not info.exists():
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, '-m', 'pcrp_ros.cli', 'build', str(ycb), '--up-axis', 'z', '--out',
-                        str(path)], check=True, cwd=REPO, capture_output=True)
+        subprocess.run(
+            [
+                sys.executable,
+                '-m',
+                'pcrp_ros.cli',
+                'build',
+                str(ycb),
+                '--up-axis',
+                'z',
+                '--out',
+                str(path),
+            ],
+            check=True,
+            cwd=REPO,
+            capture_output=True,
+        )
         from pcrp_core.model_io import model_size
         info.write_text(json.dumps({'seconds': time.perf_counter() - t0, 'bytes': model_size(path),
                                     'objects': len(list(ycb.glob('*.ply')))}))
@@ -114,7 +132,9 @@ def _replicated(model, n: int):
 
     tpl = model.templates
     reps = np.resize(np.arange(len(tpl)), n)
-    return InstanceMatcher(Templates(**{f.name: getattr(tpl, f.name)[reps] for f in fields(Templates)}))
+    return InstanceMatcher(
+        Templates(**{f.name: getattr(tpl, f.name)[reps] for f in fields(Templates)})
+    )
 
 
 def growth(model_path: str, ycb: Path, queries: int, seed: int = 0) -> dict:
@@ -125,7 +145,9 @@ def growth(model_path: str, ycb: Path, queries: int, seed: int = 0) -> dict:
 
     model = PCRP.load(model_path)
     files = sorted(ycb.glob('*.ply'))[:queries]
-    scenes = [sample_scene(Mesh.read(f), f.stem, i, 0, 'free', seed=seed) for i, f in enumerate(files)]
+    scenes = [
+        sample_scene(Mesh.read(f), f.stem, i, 0, 'free', seed=seed) for i, f in enumerate(files)
+    ]
     clouds = [model.prepare(s.points) for s in scenes]
     per_object = sum(v.nbytes for v in model.templates.to_arrays().values()) / len(model.templates)
     sizes = []
@@ -156,10 +178,20 @@ def growth(model_path: str, ycb: Path, queries: int, seed: int = 0) -> dict:
         points.append({'points': m, 'estimate': _pct(t_all)})
     # log-log slope: how the cost grows (1: linearly)
     slope = lambda xs, ys: float(np.polyfit(np.log(xs), np.log(ys), 1)[0])   # noqa: E731
-    return {'gallery': sizes, 'points': points, 'template_kb_per_object': per_object / 1e3,
-            'gallery_slope': slope([r['objects'] for r in sizes], [r['match']['median_ms'] for r in sizes]),
-            'shortlist_slope': slope([r['objects'] for r in sizes], [r['shortlist']['median_ms'] for r in sizes]),
-            'points_slope': slope([r['points'] for r in points], [r['estimate']['median_ms'] for r in points])}
+    return {
+        'gallery': sizes,
+        'points': points,
+        'template_kb_per_object': per_object / 1e3,
+        'gallery_slope': slope(
+            [r['objects'] for r in sizes], [r['match']['median_ms'] for r in sizes]
+        ),
+        'shortlist_slope': slope(
+            [r['objects'] for r in sizes], [r['shortlist']['median_ms'] for r in sizes]
+        ),
+        'points_slope': slope(
+            [r['points'] for r in points], [r['estimate']['median_ms'] for r in points]
+        ),
+    }
 
 
 def run(ycb: Path, cache: Path, per_kind: int, queries: int, seed: int = 0) -> dict:
@@ -168,10 +200,24 @@ def run(ycb: Path, cache: Path, per_kind: int, queries: int, seed: int = 0) -> d
     model_path, build = ycb_model(ycb, cache)
     with tempfile.NamedTemporaryFile(suffix='.json', delete=False) as f:
         out = Path(f.name)
-    cmd = [sys.executable, '-m', 'tools.bench_views', model_path, str(ycb), str(per_kind), str(queries), str(seed),
-           str(out)]
-    r = subprocess.run(cmd, env={**os.environ, **THREADS, 'TQDM_DISABLE': '1'}, cwd=REPO, capture_output=True,
-                       text=True)
+    cmd = [
+        sys.executable,
+        '-m',
+        'tools.bench_views',
+        model_path,
+        str(ycb),
+        str(per_kind),
+        str(queries),
+        str(seed),
+        str(out),
+    ]
+    r = subprocess.run(
+        cmd,
+        env={**os.environ, **THREADS, 'TQDM_DISABLE': '1'},
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+    )
     if r.returncode:
         raise RuntimeError(f'camera-view benchmark failed: {r.stderr[-2000:]}')
     res = json.loads(out.read_text())
@@ -183,37 +229,67 @@ def run(ycb: Path, cache: Path, per_kind: int, queries: int, seed: int = 0) -> d
 def section(res: dict) -> list[str]:
     """BENCHMARKS.md's part on camera views."""
     b = res['build']
-    L = ['## Known objects from a depth camera: YCB views, one thread', '',
-         f'The 78 YCB meshes built as the README says (`pcrp build <ycb> --up-axis z`): '
-         f"{b['seconds']:.0f} s on every core, {b['bytes'] / 1e6:.1f} MB on disk "
-         f"({b['seconds'] / b['objects']:.1f} s and {b['bytes'] / b['objects'] / 1e3:.0f} kB per object). "
-         'Views of the robot report\'s test seed; Open3D FPFH + RANSAC + ICP registers each view to the '
-         'right object (told it) in the same run.', '',
-         '| views | pcrp median / p95 ms | Open3D RANSAC + ICP, told the object | right object |',
-         '|---|---|---|---|']
+    L = [
+        '## Known objects from a depth camera: YCB views, one thread',
+        '',
+        f'The 78 YCB meshes built as the README says (`pcrp build <ycb> --up-axis z`): '
+        f"{b['seconds']:.0f} s on every core, {b['bytes'] / 1e6:.1f} MB on disk "
+        f"({b['seconds'] / b['objects']:.1f} s and "
+        f"{b['bytes'] / b['objects'] / 1e3:.0f} kB per object). "
+        "Views of the robot report's test seed; Open3D FPFH + RANSAC + ICP registers each view "
+        'to the right object (told it) in the same run.',
+        '',
+        '| views | pcrp median / p95 ms | Open3D RANSAC + ICP, told the object | right object |',
+        '|---|---|---|---|',
+    ]
     for kind, r in res['views'].items():
-        L.append(f"| {kind} ({r['pcrp']['n']}) | {r['pcrp']['median_ms']:.0f} / {r['pcrp']['p95_ms']:.0f} | "
-                 f"{r['open3d_ransac_told']['median_ms']:.0f} / {r['open3d_ransac_told']['p95_ms']:.0f} | "
-                 f"{r['right_object']:.0%} |")
+        L.append(
+            f"| {kind} ({r['pcrp']['n']}) | "
+            f"{r['pcrp']['median_ms']:.0f} / {r['pcrp']['p95_ms']:.0f} | "
+            f"{r['open3d_ransac_told']['median_ms']:.0f} / "
+            f"{r['open3d_ransac_told']['p95_ms']:.0f} | "
+            f"{r['right_object']:.0%} |"
+        )
     L += ['', 'Where the time goes (median / p95 ms per stage, as `/diagnostics` reports it):', '',
           '| stage | ' + ' | '.join(res['views']) + ' |', '|---|' + '---|' * len(res['views'])]
     stages = list(next(iter(res['views'].values()))['stages'])
     for s in stages:
-        L.append(f'| {s} | ' + ' | '.join(
-            f"{r['stages'][s]['median_ms']:.1f} / {r['stages'][s]['p95_ms']:.1f}" if s in r['stages'] else '-'
-            for r in res['views'].values()) + ' |')
+        L.append(
+            f'| {s} | '
+            + ' | '.join(
+                (
+                    f"{r['stages'][s]['median_ms']:.1f} / {r['stages'][s]['p95_ms']:.1f}"
+                    if s in r['stages']
+                    else '-'
+                )
+                for r in res['views'].values()
+            )
+            + ' |'
+        )
     g = res['growth']
-    L += ['', '### How the cost grows', '',
-          f"Against the gallery's size (templates replicated; {g['template_kb_per_object']:.0f} kB of "
-          f"templates per object in memory); log-log slope {g['gallery_slope']:.2f} for a whole answer "
-          f"(0: flat, 1: linear), {g['shortlist_slope']:.2f} for the shortlist, the only step that looks "
-          'at every object:', '', '| objects | answer median / p95 ms | shortlist median ms | templates MB |',
-          '|---|---|---|---|']
+    L += [
+        '',
+        '### How the cost grows',
+        '',
+        f"Against the gallery's size (templates replicated; "
+        f"{g['template_kb_per_object']:.0f} kB of templates per object in memory); "
+        f"log-log slope {g['gallery_slope']:.2f} for a whole answer (0: flat, 1: linear), "
+        f"{g['shortlist_slope']:.2f} for the shortlist, the only step that looks "
+        'at every object:',
+        '',
+        '| objects | answer median / p95 ms | shortlist median ms | templates MB |',
+        '|---|---|---|---|',
+    ]
     L += [f"| {r['objects']:,} | {r['match']['median_ms']:.0f} / {r['match']['p95_ms']:.0f} | "
           f"{r['shortlist']['median_ms']:.2f} | {r['template_mb']:.0f} |" for r in g['gallery']]
-    L += ['', f"Against the points in the cloud (log-log slope {g['points_slope']:.2f}: the cloud is "
-          'thinned to 1,024 points first, so only that step grows):', '', '| points | median / p95 ms |',
-          '|---|---|']
+    L += [
+        '',
+        f"Against the points in the cloud (log-log slope {g['points_slope']:.2f}: the cloud is "
+        'thinned to 1,024 points first, so only that step grows):',
+        '',
+        '| points | median / p95 ms |',
+        '|---|---|',
+    ]
     L += [f"| {r['points']:,} | {r['estimate']['median_ms']:.0f} / {r['estimate']['p95_ms']:.0f} |"
           for r in g['points']]
     return L + ['']

@@ -78,22 +78,63 @@ def _in_place(f):
 
 FAULTS = [
     Fault('missing', 'model path does not exist', lambda p: p / 'nowhere', 'no such model'),
-    Fault('a_file', 'model path is a file, not a model directory', lambda p: p / META_FILE, 'not a file'),
-    Fault('no_arrays', f'{ARRAYS_FILE} missing', _in_place(lambda p: (p / ARRAYS_FILE).unlink()), 'missing'),
-    Fault('truncated', f'{ARRAYS_FILE} cut to half', _in_place(
-        lambda p: (p / ARRAYS_FILE).write_bytes((p / ARRAYS_FILE).read_bytes()[:1000])), 'checksum'),
-    Fault('truncated_resummed', f'{ARRAYS_FILE} cut to half, checksum rewritten', _in_place(_truncated_resummed),
-          'unreadable arrays'),
-    Fault('tampered_arrays', f'one byte of {ARRAYS_FILE} changed', _in_place(_flip_byte), 'checksum'),
-    Fault('bad_json', f'{META_FILE} is not JSON', _in_place(lambda p: (p / META_FILE).write_text('{not json')),
-          'unreadable model metadata'),
-    Fault('newer_version', 'format version 99 (from a newer pcrp)', _in_place(lambda p: _edit_meta(p, format_version=99)),
-          'format version 99'),
-    Fault('not_pcrp', 'metadata of some other program', _in_place(lambda p: _edit_meta(p, format='something-else')),
-          'not a pcrp model'),
-    Fault('tampered_meta', 'gallery IDs edited to disagree with the arrays',
-          _in_place(lambda p: _edit_meta(p, gallery_ids=['only_one'])), 'incomplete or inconsistent'),
-    Fault('pickle', 'a pickled object in the arrays, checksum valid', _in_place(_pickled), 'unreadable arrays'),
+    Fault(
+        'a_file',
+        'model path is a file, not a model directory',
+        lambda p: p / META_FILE,
+        'not a file',
+    ),
+    Fault(
+        'no_arrays',
+        f'{ARRAYS_FILE} missing',
+        _in_place(lambda p: (p / ARRAYS_FILE).unlink()),
+        'missing',
+    ),
+    Fault(
+        'truncated',
+        f'{ARRAYS_FILE} cut to half',
+        _in_place(lambda p: (p / ARRAYS_FILE).write_bytes((p / ARRAYS_FILE).read_bytes()[:1000])),
+        'checksum',
+    ),
+    Fault(
+        'truncated_resummed',
+        f'{ARRAYS_FILE} cut to half, checksum rewritten',
+        _in_place(_truncated_resummed),
+        'unreadable arrays',
+    ),
+    Fault(
+        'tampered_arrays', f'one byte of {ARRAYS_FILE} changed', _in_place(_flip_byte), 'checksum'
+    ),
+    Fault(
+        'bad_json',
+        f'{META_FILE} is not JSON',
+        _in_place(lambda p: (p / META_FILE).write_text('{not json')),
+        'unreadable model metadata',
+    ),
+    Fault(
+        'newer_version',
+        'format version 99 (from a newer pcrp)',
+        _in_place(lambda p: _edit_meta(p, format_version=99)),
+        'format version 99',
+    ),
+    Fault(
+        'not_pcrp',
+        'metadata of some other program',
+        _in_place(lambda p: _edit_meta(p, format='something-else')),
+        'not a pcrp model',
+    ),
+    Fault(
+        'tampered_meta',
+        'gallery IDs edited to disagree with the arrays',
+        _in_place(lambda p: _edit_meta(p, gallery_ids=['only_one'])),
+        'incomplete or inconsistent',
+    ),
+    Fault(
+        'pickle',
+        'a pickled object in the arrays, checksum valid',
+        _in_place(_pickled),
+        'unreadable arrays',
+    ),
 ]
 
 
@@ -111,7 +152,9 @@ class StartUp:
         rcl's own warnings about the environment (e.g. a deprecated variable) are not the program's
         to answer for.
         """
-        return [line for line in self.stderr.splitlines() if line.strip() and '] [rcl]:' not in line]
+        return [
+            line for line in self.stderr.splitlines() if line.strip() and '] [rcl]:' not in line
+        ]
 
 
 def damaged_copy(fault: Fault, model_dir: Path, work: Path) -> Path:
@@ -121,16 +164,27 @@ def damaged_copy(fault: Fault, model_dir: Path, work: Path) -> Path:
     return fault.damage(dst)
 
 
-def start(program: str, model_path: Path, cloud_file: Path, timeout: float = 60.0) -> subprocess.CompletedProcess:
+def start(
+    program: str, model_path: Path, cloud_file: Path, timeout: float = 60.0
+) -> subprocess.CompletedProcess:
     """Start the node or run a CLI query on the given model, as a user would."""
     if program == 'node':
-        cmd = [sys.executable, '-m', 'pcrp_ros.node', '--ros-args', '-p', f'model_path:={model_path}']
+        cmd = [
+            sys.executable,
+            '-m',
+            'pcrp_ros.node',
+            '--ros-args',
+            '-p',
+            f'model_path:={model_path}',
+        ]
     else:
         cmd = [sys.executable, '-m', 'pcrp_ros.cli', 'query', str(model_path), str(cloud_file)]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
 
 
-def try_fault(fault: Fault, program: str, model_dir: Path, work: Path, cloud_file: Path) -> StartUp:
+def try_fault(
+    fault: Fault, program: str, model_dir: Path, work: Path, cloud_file: Path
+) -> StartUp:
     path = damaged_copy(fault, model_dir, work)
     out = start(program, path, cloud_file)
     return StartUp(fault.name, program, out.returncode, out.stderr)

@@ -39,7 +39,7 @@ import numpy as np
 REPORT = 'ROBUSTNESS.md'
 
 
-# -- bags with surprises ------------------------------------------------------------------------------
+# -- bags with surprises --------------------------------------------------------------------------
 def mixed_bag(path: Path) -> dict:
     """
     Write a bag as a user may hand it over.
@@ -56,8 +56,12 @@ def mixed_bag(path: Path) -> dict:
     with BagWriter(path) as bag:
         for k, o in enumerate(objs):
             ts = (k + 1) * 10**9
-            bag.write('segmented_object', cloud_msg(o.points + [0, 0, 3], header(k + 1, 0, 'cam')), ts)
-            bag.write('other/points', cloud_msg(o.points + [0, 0, 3], header(k + 1, 1, 'cam')), ts + 1)
+            bag.write(
+                'segmented_object', cloud_msg(o.points + [0, 0, 3], header(k + 1, 0, 'cam')), ts
+            )
+            bag.write(
+                'other/points', cloud_msg(o.points + [0, 0, 3], header(k + 1, 1, 'cam')), ts + 1
+            )
             bag.write('chatter', T['std_msgs/msg/String'](data='hello'), ts + 2)
         no_z = cloud_msg(objs[0].points, header(9, 0, 'cam'))
         no_z.fields = no_z.fields[:2]
@@ -81,8 +85,12 @@ def truncated_bag(path: Path, storage: str = 'mcap', keep: float = 0.6) -> int:
 
 
 def _pcrp(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, '-m', 'pcrp_ros.cli', *map(str, args)], capture_output=True, text=True,
-                          timeout=300)
+    return subprocess.run(
+        [sys.executable, '-m', 'pcrp_ros.cli', *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def run_bag_faults(work: Path) -> list[dict]:
@@ -94,20 +102,35 @@ def run_bag_faults(work: Path) -> list[dict]:
     mixed = work / 'mixed'
     mixed_bag(mixed)
     for name, bag, args, what in (
-            ('truncated_mcap', trunc, [], f'MCAP recording cut at 60 % ({sent} clouds written)'),
-            ('truncated_sqlite', trunc_sql, [], f'SQLite bag cut at 60 % ({sent} clouds written)'),
-            ('mixed_all', mixed, [], 'clouds on two topics, one without z, plus a String topic'),
-            ('mixed_one_topic', mixed, ['--topics', 'segmented_object'], 'the same, asking for one topic'),
-            ('absent_topic', mixed, ['--topics', 'no/such/topic'], 'asking for a topic the bag lacks')):
+        ('truncated_mcap', trunc, [], f'MCAP recording cut at 60 % ({sent} clouds written)'),
+        ('truncated_sqlite', trunc_sql, [], f'SQLite bag cut at 60 % ({sent} clouds written)'),
+        ('mixed_all', mixed, [], 'clouds on two topics, one without z, plus a String topic'),
+        (
+            'mixed_one_topic',
+            mixed,
+            ['--topics', 'segmented_object'],
+            'the same, asking for one topic',
+        ),
+        ('absent_topic', mixed, ['--topics', 'no/such/topic'], 'asking for a topic the bag lacks'),
+    ):
         out_bag = work / f'{name}_out'
         shutil.rmtree(out_bag, ignore_errors=True)
         proc = _pcrp('process', bag, '--out', out_bag, *args)
         answered, refused = _tally(proc.stdout)
         rep = _pcrp('replay', bag, '--rate-factor', '50', *args)
-        rows.append({'name': name, 'what': what, 'process_exit': proc.returncode, 'process_said': _said(proc.stderr),
-                     'answered': answered, 'refused': refused,
-                     'replay_exit': rep.returncode, 'replay_said': _said(rep.stderr),
-                     'replay_published': _published(rep.stdout)})
+        rows.append(
+            {
+                'name': name,
+                'what': what,
+                'process_exit': proc.returncode,
+                'process_said': _said(proc.stderr),
+                'answered': answered,
+                'refused': refused,
+                'replay_exit': rep.returncode,
+                'replay_said': _said(rep.stderr),
+                'replay_published': _published(rep.stdout),
+            }
+        )
     return rows
 
 
@@ -132,7 +155,7 @@ def _published(stdout: str) -> int:
     return -1
 
 
-# -- running the catalogues -----------------------------------------------------------------------------
+# -- running the catalogues -----------------------------------------------------------------------
 def run_cases(model) -> list[tuple]:
     from pcrp_ros.node import PcrpNode
     from pcrp_ros.spinning import ros_context, spinning
@@ -150,7 +173,10 @@ def run_cases(model) -> list[tuple]:
             for case in CASES:
                 out = runner.run(case)
                 rows.append((case, out, accepted(case, out)))
-                print(f'  {case.name:18s} {out.outcome:28s} next good cloud: {out.next_good}', flush=True)
+                print(
+                    f'  {case.name:18s} {out.outcome:28s} next good cloud: {out.next_good}',
+                    flush=True,
+                )
     return rows
 
 
@@ -161,18 +187,26 @@ def run_faults(model_dir: Path, work: Path) -> list[tuple]:
     np.save(cloud, np.random.default_rng(0).normal(size=(500, 3)))
     rows = []
     for fault in FAULTS:
-        results = [try_fault(fault, program, model_dir, work, cloud) for program in ('node', 'cli')]
+        results = [
+            try_fault(fault, program, model_dir, work, cloud) for program in ('node', 'cli')
+        ]
         ok = [handled(fault, r, str(work / fault.name)) for r in results]
         rows.append((fault, results, ok))
-        print(f'  {fault.name:20s} node exit {results[0].returncode}, cli exit {results[1].returncode}', flush=True)
+        print(
+            f'  {fault.name:20s} node exit {results[0].returncode}, '
+            f'cli exit {results[1].returncode}',
+            flush=True,
+        )
     return rows
 
 
-# -- the report ------------------------------------------------------------------------------------------
+# -- the report -----------------------------------------------------------------------------------
 def _allowed(case) -> str:
     from tools.bad_clouds import ANSWERED, ANY_ANSWER
     names = {ANSWERED: 'answered right', ANY_ANSWER: 'answered'}
-    return ' or '.join(names.get(a, a.replace('rejected:', 'refused: ')) for a in sorted(case.allowed))
+    return ' or '.join(
+        names.get(a, a.replace('rejected:', 'refused: ')) for a in sorted(case.allowed)
+    )
 
 
 def _outcome(out) -> str:
@@ -180,7 +214,9 @@ def _outcome(out) -> str:
     if out.outcome == ANSWERED:
         return f'answered right ({out.gallery_id}, {out.rotation_error:.1f}°)'
     if out.outcome == ANY_ANSWER:
-        return f"answered ({out.gallery_id}, {out.rotation_error:.0f}° off the source object's pose)"
+        return (
+            f"answered ({out.gallery_id}, {out.rotation_error:.0f}° off the source object's pose)"
+        )
     return out.outcome.replace('rejected:', 'refused: ')
 
 
@@ -194,38 +230,50 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
     lines = [
         '# Robustness: what the node does with bad input, broken files and load',
         '',
-        f"Regenerate with `{command}` (about {'15' if soak and soak['duration_s'] >= 600 else 'a few'} minutes). "
-        f"Made {time.strftime('%Y-%m-%d')} on {platform.machine()}, Python {platform.python_version()}. "
+        f'Regenerate with `{command}` '
+        f"(about {'15' if soak and soak['duration_s'] >= 600 else 'a few'} minutes). "
+        f"Made {time.strftime('%Y-%m-%d')} on {platform.machine()}, "
+        f'Python {platform.python_version()}. '
         'Every row below was produced by running the real thing, and the same catalogues '
         '(`tools/bad_clouds.py`, `tools/faults.py`, `tools/robustness.py`) are run by the test '
-        'suite (`test/ros/test_node_robustness.py`, `test/integration/test_bags.py`), so each row is also a passing test.',
+        'suite (`test/ros/test_node_robustness.py`, `test/integration/test_bags.py`), so each row '
+        'is also a passing test.',
         '',
         '## Bad clouds, sent to the running node over DDS',
         '',
-        'Each cloud below is built from one good cloud (one side of a gallery object, as a depth camera sees it) '
-        'and published to the node with its default parameters. After each, the good cloud is sent again: it must '
-        'be answered with the right gallery ID and under 10° of rotation error. Refusals are counted in '
-        '`/diagnostics` under the reason shown and logged once per reason per `log_throttle_sec`.',
+        'Each cloud below is built from one good cloud (one side of a gallery object, as a depth '
+        'camera sees it) and published to the node with its default parameters. After each, the '
+        'good cloud is sent again: it must be answered with the right gallery ID and under 10° of '
+        'rotation error. Refusals are counted in `/diagnostics` under the reason shown and logged '
+        'once per reason per `log_throttle_sec`.',
         '',
-        '| case | what was sent | allowed | what the node did | decided after | next good cloud | verdict |',
+        '| case | what was sent | allowed | what the node did | decided after | next good cloud '
+        '| verdict |',
         '|---|---|---|---|---|---|---|',
     ]
     for case, out, ok in cases:
-        lines.append(f'| `{case.name}` | {case.what} | {_allowed(case)} | {_outcome(out)} | {out.seconds:.2f} s '
-                     f"| {out.next_good.replace('answered', 'answered right')} | {'pass' if ok else 'FAIL'} |")
+        lines.append(
+            f'| `{case.name}` | {case.what} | {_allowed(case)} | {_outcome(out)} '
+            f'| {out.seconds:.2f} s '
+            f"| {out.next_good.replace('answered', 'answered right')} "
+            f"| {'pass' if ok else 'FAIL'} |"
+        )
     lines += [
         '',
-        "Units: the node takes clouds to be in the gallery's units (`scale_mode: metric`). Millimetre clouds are "
-        'refused for their fit, not misread; with `scale_mode: normalize` they are answered with their scale '
-        '(`test_a_cloud_in_millimetres_is_answered_or_rejected_not_crashed`). A sphere, a cube or a plane has no '
-        'orientation to find; the node may answer or refuse them, never crash.',
+        "Units: the node takes clouds to be in the gallery's units (`scale_mode: metric`). "
+        'Millimetre clouds are refused for their fit, not misread; with `scale_mode: normalize` '
+        'they are answered with their scale '
+        '(`test_a_cloud_in_millimetres_is_answered_or_rejected_not_crashed`). A sphere, a cube '
+        'or a plane has no orientation to find; the node may answer or refuse them, never crash.',
         '',
         '## Broken model files, at start-up',
         '',
-        'A damaged copy of the shipped model is handed to the node (`python -m pcrp_ros.node --ros-args -p '
-        'model_path:=…`) and to the CLI (`pcrp query MODEL CLOUD`). Both must stop with one error line naming '
-        'the file and the problem, a non-zero exit and no traceback. Nothing is unpickled: `arrays.npz` is read '
-        'with `allow_pickle=False`, so the pickled object below is refused even with a valid checksum.',
+        'A damaged copy of the shipped model is handed to the node '
+        '(`python -m pcrp_ros.node --ros-args -p model_path:=…`) and to the CLI '
+        '(`pcrp query MODEL CLOUD`). Both must stop with one error line naming the file and the '
+        'problem, a non-zero exit and no traceback. Nothing is unpickled: `arrays.npz` is read '
+        'with `allow_pickle=False`, so the pickled object below is refused even with a valid '
+        'checksum.',
         '',
         '| fault | node exit | CLI exit | the one line the node printed | verdict |',
         '|---|---|---|---|---|',
@@ -233,72 +281,109 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
     for fault, results, ok in faults:
         node, cli = results
         line = node.error_lines()[0] if node.error_lines() else ''
-        lines.append(f'| `{fault.name}`: {fault.what} | {node.returncode} | {cli.returncode} | {_short(line, work)} '
-                     f"| {'pass' if all(ok) else 'FAIL'} |")
+        lines.append(
+            f'| `{fault.name}`: {fault.what} | {node.returncode} | {cli.returncode} '
+            f'| {_short(line, work)} '
+            f"| {'pass' if all(ok) else 'FAIL'} |"
+        )
     lines += [
         '',
         '## Damaged and surprising bags',
         '',
-        '`pcrp process BAG --out OUT` and `pcrp replay BAG` (no node listening) on bags made for the purpose. '
-        'Both say on stderr what they could not use and carry on with what they could read; they exit 1 only '
-        'when nothing at all could be read.',
+        '`pcrp process BAG --out OUT` and `pcrp replay BAG` (no node listening) on bags made for '
+        'the purpose. Both say on stderr what they could not use and carry on with what they '
+        'could read; they exit 1 only when nothing at all could be read.',
         '',
-        '| bag | process: exit, clouds answered / refused | what process said | replay: exit, clouds published '
-        '| what replay said |',
+        '| bag | process: exit, clouds answered / refused | what process said '
+        '| replay: exit, clouds published | what replay said |',
         '|---|---|---|---|---|',
     ]
     for b in bags:
-        lines.append(f"| {b['what']} | {b['process_exit']}, {b['answered']} / {b['refused']} "
-                     f"| {_short(b['process_said'], work) or '-'} | {b['replay_exit']}, {b['replay_published']} "
-                     f"| {_short(b['replay_said'], work) or '-'} |")
+        lines.append(
+            f"| {b['what']} | {b['process_exit']}, {b['answered']} / {b['refused']} "
+            f"| {_short(b['process_said'], work) or '-'} "
+            f"| {b['replay_exit']}, {b['replay_published']} "
+            f"| {_short(b['replay_said'], work) or '-'} |"
+        )
     lines += [
         '',
         '## While running: publishers, QoS, other instances',
         '',
         '| situation | what happens | checked by |',
         '|---|---|---|',
-        "| a publisher leaves and another starts on the same topic | the new one's clouds are answered | "
-        '`test_publishers_that_come_and_go_and_reliable_ones_are_all_answered` |',
-        "| a publisher with reliable QoS (the node's input is best effort) | matched and answered | same test |",
-        '| a second node instance on the same topics (named apart: `-r __node:=pcrp_node_2`) | each answers each '
-        'cloud once with the same pose; `/diagnostics` keeps them apart by node name | '
-        '`test_a_second_instance_answers_alongside_with_its_own_diagnostics` |',
-        '| clouds faster than the node can answer | newest kept per topic, the rest counted as `dropped_stale`; '
-        'nothing queues | the soak below |',
+        '| a publisher leaves and another starts on the same topic '
+        "| the new one's clouds are answered "
+        '| `test_publishers_that_come_and_go_and_reliable_ones_are_all_answered` |',
+        "| a publisher with reliable QoS (the node's input is best effort) | matched and answered "
+        '| same test |',
+        '| a second node instance on the same topics (named apart: `-r __node:=pcrp_node_2`) '
+        '| each answers each cloud once with the same pose; `/diagnostics` keeps them apart '
+        'by node name | `test_a_second_instance_answers_alongside_with_its_own_diagnostics` |',
+        '| clouds faster than the node can answer '
+        '| newest kept per topic, the rest counted as `dropped_stale`; nothing queues '
+        '| the soak below |',
         '| Ctrl-C | clean exit, code 0 | the soak below |',
         '',
     ]
     if soak:
         lines += [
-            f"## Soak: {soak['topics']} topics at {soak['rate_hz']:g} Hz for {soak['duration_s'] / 60:g} minutes",
+            f"## Soak: {soak['topics']} topics at {soak['rate_hz']:g} Hz "
+            f"for {soak['duration_s'] / 60:g} minutes",
             '',
-            f"The node as its own process (`python -m tools soak`), {soak['bad_share']:.0%} of the clouds bad (the refusals of "
-            'the first table that are decided on arrival, in turn), the rest good one-sided views of 16 gallery '
-            "objects. Latency is from arrival to publication; age from the cloud's stamp to publication. On this "
-            '2-core machine one answer takes about 0.8 s, so most clouds are dropped as stale: by design, the node '
-            'answers the newest cloud of each topic and never builds a backlog.',
+            'The node as its own process (`python -m tools soak`), '
+            f"{soak['bad_share']:.0%} of the clouds bad (the refusals of the first table that are "
+            'decided on arrival, in turn), the rest good one-sided views of 16 gallery '
+            "objects. Latency is from arrival to publication; age from the cloud's stamp to "
+            'publication. On this 2-core machine one answer takes about 0.8 s, so most clouds '
+            'are dropped as stale: by design, the node answers the newest cloud of each topic '
+            'and never builds a backlog.',
             '',
             soak_mod.table(soak),
             '',
         ]
     path = out_dir / REPORT
     path.write_text('\n'.join(lines))
-    data = {'cases': [{'case': c.name, 'outcome': o.outcome, 'seconds': o.seconds, 'gallery_id': o.gallery_id,
-                       'rotation_error': None if np.isnan(o.rotation_error) else o.rotation_error,
-                       'next_good': o.next_good, 'pass': ok} for c, o, ok in cases],
-            'faults': [{'fault': f.name, 'node_exit': r[0].returncode, 'cli_exit': r[1].returncode,
-                        'node_line': _short(r[0].error_lines()[0] if r[0].error_lines() else '', work),
-                        'pass': all(ok)} for f, r, ok in faults],
-            'bags': [{k: (_short(v, work) if isinstance(v, str) else v) for k, v in b.items()} for b in bags],
-            'soak': soak}
+    data = {
+        'cases': [
+            {
+                'case': c.name,
+                'outcome': o.outcome,
+                'seconds': o.seconds,
+                'gallery_id': o.gallery_id,
+                'rotation_error': None if np.isnan(o.rotation_error) else o.rotation_error,
+                'next_good': o.next_good,
+                'pass': ok,
+            }
+            for c, o, ok in cases
+        ],
+        'faults': [
+            {
+                'fault': f.name,
+                'node_exit': r[0].returncode,
+                'cli_exit': r[1].returncode,
+                'node_line': _short(r[0].error_lines()[0] if r[0].error_lines() else '', work),
+                'pass': all(ok),
+            }
+            for f, r, ok in faults
+        ],
+        'bags': [
+            {k: (_short(v, work) if isinstance(v, str) else v) for k, v in b.items()} for b in bags
+        ],
+        'soak': soak,
+    }
     (out_dir / 'robustness.json').write_text(json.dumps(data, indent=1, default=str))
     return path
 
 
 def register(sub) -> None:
-    p = sub.add_parser('robustness', help='try every bad input, broken model and damaged bag; soak; write ROBUSTNESS.md')
+    p = sub.add_parser(
+        'robustness',
+        help='try every bad input, broken model and damaged bag; soak; write ROBUSTNESS.md',
+    )
     p.add_argument('--out', default='docs/results')
-    p.add_argument('--soak-duration', type=float, default=600.0, help='seconds; 0 to skip the soak')
+    p.add_argument(
+        '--soak-duration', type=float, default=600.0, help='seconds; 0 to skip the soak'
+    )
     p.add_argument('--quick', action='store_true', help='a 20 s soak on 2 topics instead')
     p.set_defaults(func=_run)
 
@@ -307,8 +392,15 @@ def _run(args) -> int:
     from pcrp_core import default_model_path, PCRP
     from tools import soak as soak_mod
 
-    command = 'python -m tools robustness' + (' --quick' if args.quick else '') + (
-        f' --soak-duration {args.soak_duration:g}' if args.soak_duration != 600 and not args.quick else '')
+    command = (
+        'python -m tools robustness'
+        + (' --quick' if args.quick else '')
+        + (
+            f' --soak-duration {args.soak_duration:g}'
+            if args.soak_duration != 600 and not args.quick
+            else ''
+        )
+    )
     model = PCRP.load(None)
     work = Path(tempfile.mkdtemp(prefix='pcrp_robustness_'))
     print('bad clouds, through the node over DDS:', flush=True)
@@ -326,5 +418,9 @@ def _run(args) -> int:
     path = write_report(Path(args.out), cases, faults, bags, soak, work, command)
     shutil.rmtree(work, ignore_errors=True)
     print(f'wrote {path}')
-    passed = all(ok for _, _, ok in cases) and all(all(ok) for _, _, ok in faults) and (soak is None or soak['passed'])
+    passed = (
+        all(ok for _, _, ok in cases)
+        and all(all(ok) for _, _, ok in faults)
+        and (soak is None or soak['passed'])
+    )
     return 0 if passed else 1

@@ -71,13 +71,28 @@ class _NodeProcesses:
 
     def _start(self, name, model_path):
         params = self.dir / f'{name}.yaml'
-        lines = [f'{name}:', '  ros__parameters:', f"    input_topics: [{', '.join(self.share[name])}]",
-                 f'    workers: {self.workers}']
+        lines = [
+            f'{name}:',
+            '  ros__parameters:',
+            f"    input_topics: [{', '.join(self.share[name])}]",
+            f'    workers: {self.workers}',
+        ]
         if model_path:
             lines.append(f"    model_path: '{model_path}'")
         params.write_text('\n'.join(lines) + '\n')
-        cmd = [sys.executable, '-m', 'pcrp_ros.node', '--ros-args', '-r', f'__node:={name}', '--params-file', str(params)]
-        return subprocess.Popen(cmd, stdout=(self.dir / f'{name}.log').open('w'), stderr=subprocess.STDOUT)
+        cmd = [
+            sys.executable,
+            '-m',
+            'pcrp_ros.node',
+            '--ros-args',
+            '-r',
+            f'__node:={name}',
+            '--params-file',
+            str(params),
+        ]
+        return subprocess.Popen(
+            cmd, stdout=(self.dir / f'{name}.log').open('w'), stderr=subprocess.STDOUT
+        )
 
     def diagnostic_names(self) -> dict:
         # statuses are named by the node's full name and the resolved topic
@@ -183,21 +198,28 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     rss = []
     try:
         deadline = time.monotonic() + 60.0
-        while time.monotonic() < deadline and not all(p.get_subscription_count() for p in pubs.values()):
+        while time.monotonic() < deadline and not all(
+            p.get_subscription_count() for p in pubs.values()
+        ):
             if not nodes.alive():
                 raise RuntimeError(f'a node exited at start-up; see the logs in {nodes.dir}')
             time.sleep(0.1)
         # the driver sees the match before the node's reader has seen the writer: give discovery
         # a moment, or the first clouds are lost on the way
         time.sleep(2.0)
-        progress(f'soak: {processes} node process(es) up ({workers} worker(s) each); {n_topics} topics at {rate:g} Hz for {duration:g} s, '
-                 f'{bad_share:.0%} bad clouds')
+        progress(
+            f'soak: {processes} node process(es) up ({workers} worker(s) each); '
+            f'{n_topics} topics at {rate:g} Hz for {duration:g} s, '
+            f'{bad_share:.0%} bad clouds'
+        )
         bad_cycle = list(bads.items())
         t0 = next_rss = time.monotonic()
         tick = 0
         while time.monotonic() - t0 < duration:
             for k, t in enumerate(topics):
-                header = Header(stamp=client.get_clock().now().to_msg(), frame_id='camera_optical_frame')
+                header = Header(
+                    stamp=client.get_clock().now().to_msg(), frame_id='camera_optical_frame'
+                )
                 if rng.random() < bad_share:
                     reason, case = bad_cycle[(tick * n_topics + k) % len(bad_cycle)]
                     pubs[t].publish(case.make(goods[0], header))
@@ -213,82 +235,160 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
                 rss.append((now - t0, nodes.rss_mb()))
                 next_rss += max(1.0, duration / 60)
                 if len(rss) % 10 == 0:
-                    progress(f"soak: {now - t0:5.0f} s, sent {sum(s['good'] + s['bad'] for s in sent.values())}, "
-                             f"answered {int(sum(diag.get(x, 'answered') for x in topics))}, rss {rss[-1][1]:.0f} MB")
+                    progress(
+                        f'soak: {now - t0:5.0f} s, '
+                        f"sent {sum(s['good'] + s['bad'] for s in sent.values())}, "
+                        f"answered {int(sum(diag.get(x, 'answered') for x in topics))}, "
+                        f'rss {rss[-1][1]:.0f} MB'
+                    )
             time.sleep(max(0.0, t0 + tick / rate - time.monotonic()))
             if not nodes.alive():
                 break
         rss.append((time.monotonic() - t0, nodes.rss_mb()))
         # let the worker finish its last cloud and diagnostics catch up with everything sent
         settle = time.monotonic() + 30.0
-        total = lambda t: sum(diag.get(t, k) for k in ('answered', 'rejected', 'dropped_stale'))  # noqa: E731
-        while time.monotonic() < settle and nodes.alive() and not all(
-                diag.get(t, 'received') == sent[t]['good'] + sent[t]['bad'] and total(t) == diag.get(t, 'received')
-                for t in topics):
+
+        def total(t):
+            return sum(diag.get(t, k) for k in ('answered', 'rejected', 'dropped_stale'))
+
+        while (
+            time.monotonic() < settle
+            and nodes.alive()
+            and not all(
+                diag.get(t, 'received') == sent[t]['good'] + sent[t]['bad']
+                and total(t) == diag.get(t, 'received')
+                for t in topics
+            )
+        ):
             time.sleep(0.5)
         time.sleep(1.5)   # one more diagnostics period, so the figures read are final
         alive = nodes.alive()
         codes = nodes.stop()
     finally:
         executor.shutdown(timeout_sec=2.0)
-        spin.join(timeout=5.0)   # a spinning thread left at exit aborts the interpreter (std::terminate)
+        # a spinning thread left at exit aborts the interpreter (std::terminate)
+        spin.join(timeout=5.0)
         client.destroy_node()
         rclpy.try_shutdown()
         for p in nodes.procs:
             if p.poll() is None:
                 p.kill()
     code = max(codes, key=abs)
-    result = _summarise(topics, sent, diag, poses, rss, alive, code, nodes.log(), duration, rate, bad_share,
-                        str(nodes.dir))
+    result = _summarise(
+        topics,
+        sent,
+        diag,
+        poses,
+        rss,
+        alive,
+        code,
+        nodes.log(),
+        duration,
+        rate,
+        bad_share,
+        str(nodes.dir),
+    )
     result['processes'] = processes
     result['workers'] = workers
     return result
 
 
-def _summarise(topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, log_path) -> dict:
+def _summarise(
+    topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, log_path
+) -> dict:
     per_topic = {}
-    checks = {'no crash (alive at the end, exit 0 on Ctrl-C, no traceback)': alive and code == 0 and 'Traceback' not in log}
+    checks = {
+        'no crash (alive at the end, exit 0 on Ctrl-C, no traceback)': alive
+        and code == 0
+        and 'Traceback' not in log
+    }
     for t in topics:
-        d = {k: diag.get(t, k) for k in ('received', 'answered', 'rejected', 'dropped_stale', 'rejected_low_confidence',
-                                         'latency_p50_ms', 'latency_p95_ms', 'age_p50_ms', 'age_p95_ms')}
+        d = {
+            k: diag.get(t, k)
+            for k in (
+                'received',
+                'answered',
+                'rejected',
+                'dropped_stale',
+                'rejected_low_confidence',
+                'latency_p50_ms',
+                'latency_p95_ms',
+                'age_p50_ms',
+                'age_p95_ms',
+            )
+        }
         s = sent[t]
-        bad_counted = all(diag.get(t, f'rejected_{k[4:]}') == v for k, v in s.items() if k.startswith('bad_'))
-        good_accounted = d['answered'] + d['rejected_low_confidence'] + d['dropped_stale'] == s['good']
+        bad_counted = all(
+            diag.get(t, f'rejected_{k[4:]}') == v for k, v in s.items() if k.startswith('bad_')
+        )
+        good_accounted = (
+            d['answered'] + d['rejected_low_confidence'] + d['dropped_stale'] == s['good']
+        )
         per_topic[t] = {'sent_good': s['good'], 'sent_bad': s['bad'], **d, 'poses_seen': poses[t]}
         checks[f'{t}: every cloud sent was received'] = d['received'] == s['good'] + s['bad']
         checks[f'{t}: every bad cloud counted under its reason'] = bad_counted
-        checks[f'{t}: every good cloud answered, refused for fit or dropped stale'] = good_accounted
+        checks[f'{t}: every good cloud answered, refused for fit or dropped stale'] = (
+            good_accounted
+        )
         checks[f'{t}: a pose published for every answer'] = poses[t] == d['answered']
     warm = [m for s, m in rss if s >= 0.2 * duration] or [m for _, m in rss]
     growth = warm[-1] / warm[0] - 1.0 if warm else float('nan')
     checks['resident memory flat within 10 % after warm-up'] = bool(abs(growth) <= 0.10)
-    return {'duration_s': duration, 'rate_hz': rate, 'topics': len(topics), 'bad_share': bad_share,
-            'per_topic': per_topic, 'rss_mb': [(round(s, 1), round(m, 1)) for s, m in rss],
-            'rss_start_mb': rss[0][1] if rss else float('nan'), 'rss_warm_mb': warm[0] if warm else float('nan'),
-            'rss_end_mb': rss[-1][1] if rss else float('nan'), 'rss_growth_after_warmup': growth,
-            'exit_code': code, 'node_log': log_path, 'checks': checks, 'passed': all(checks.values())}
+    return {
+        'duration_s': duration,
+        'rate_hz': rate,
+        'topics': len(topics),
+        'bad_share': bad_share,
+        'per_topic': per_topic,
+        'rss_mb': [(round(s, 1), round(m, 1)) for s, m in rss],
+        'rss_start_mb': rss[0][1] if rss else float('nan'),
+        'rss_warm_mb': warm[0] if warm else float('nan'),
+        'rss_end_mb': rss[-1][1] if rss else float('nan'),
+        'rss_growth_after_warmup': growth,
+        'exit_code': code,
+        'node_log': log_path,
+        'checks': checks,
+        'passed': all(checks.values()),
+    }
 
 
 def table(result: dict) -> str:
-    rows = ['| topic | good sent | bad sent | received | answered | refused (fit) | refused (bad input) | dropped stale '
-            '| latency p50 / p95 ms | age p50 / p95 ms |', '|---|---|---|---|---|---|---|---|---|---|']
+    rows = [
+        '| topic | good sent | bad sent | received | answered | refused (fit) '
+        '| refused (bad input) | dropped stale | latency p50 / p95 ms | age p50 / p95 ms |',
+        '|---|---|---|---|---|---|---|---|---|---|',
+    ]
     for t, d in result['per_topic'].items():
         bad = d['rejected'] - d['rejected_low_confidence']
-        rows.append(f"| {t} | {d['sent_good']} | {d['sent_bad']} | {d['received']:.0f} | {d['answered']:.0f} "
-                    f"| {d['rejected_low_confidence']:.0f} | {bad:.0f} | {d['dropped_stale']:.0f} "
-                    f"| {d['latency_p50_ms']:.0f} / {d['latency_p95_ms']:.0f} | {d['age_p50_ms']:.0f} / {d['age_p95_ms']:.0f} |")
+        rows.append(
+            f"| {t} | {d['sent_good']} | {d['sent_bad']} | {d['received']:.0f} "
+            f"| {d['answered']:.0f} "
+            f"| {d['rejected_low_confidence']:.0f} | {bad:.0f} | {d['dropped_stale']:.0f} "
+            f"| {d['latency_p50_ms']:.0f} / {d['latency_p95_ms']:.0f} "
+            f"| {d['age_p50_ms']:.0f} / {d['age_p95_ms']:.0f} |"
+        )
     rows.append('')
-    who = 'the node' if result.get('processes', 1) == 1 else f"the {result['processes']} node processes together"
-    rows.append(f"Resident memory of {who}: {result['rss_start_mb']:.0f} MB at start, {result['rss_warm_mb']:.0f} MB "
-                f"after warm-up (20 % of the run), {result['rss_end_mb']:.0f} MB at the end "
-                f"({100 * result['rss_growth_after_warmup']:+.1f} % after warm-up). Exit code on Ctrl-C: {result['exit_code']}.")
+    who = (
+        'the node'
+        if result.get('processes', 1) == 1
+        else f"the {result['processes']} node processes together"
+    )
+    rows.append(
+        f"Resident memory of {who}: {result['rss_start_mb']:.0f} MB at start, "
+        f"{result['rss_warm_mb']:.0f} MB after warm-up (20 % of the run), "
+        f"{result['rss_end_mb']:.0f} MB at the end "
+        f"({100 * result['rss_growth_after_warmup']:+.1f} % after warm-up). "
+        f"Exit code on Ctrl-C: {result['exit_code']}."
+    )
     rows.append('')
     rows += [f"- {'pass' if ok else 'FAIL'}: {name}" for name, ok in result['checks'].items()]
     return '\n'.join(rows)
 
 
 def register(sub) -> None:
-    p = sub.add_parser('soak', help='run the node for a while on good and bad clouds and check it held up')
+    p = sub.add_parser(
+        'soak', help='run the node for a while on good and bad clouds and check it held up'
+    )
     p.add_argument('--duration', type=float, default=600.0, help='seconds of publishing')
     p.add_argument('--rate', type=float, default=10.0, help='clouds per second on each topic')
     p.add_argument('--topics', type=int, default=4)
@@ -302,10 +402,16 @@ def register(sub) -> None:
 
 def _soak(args) -> int:
     import json
-    result = run(args.duration, args.rate, args.topics, args.bad_share, args.model, processes=args.processes,
-                 workers=args.workers)
+    result = run(
+        args.duration,
+        args.rate,
+        args.topics,
+        args.bad_share,
+        args.model,
+        processes=args.processes,
+        workers=args.workers,
+    )
     print(table(result))
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=1))
     return 0 if result['passed'] else 1
-

@@ -24,8 +24,15 @@ from pcrp_core.instance.calibration import features
 from pcrp_core.result import PoseResult
 
 
-def answer(model, pts: np.ndarray, viewpoint: np.ndarray, up_pair, opts: QueryOptions, timings: dict,
-           t0: float) -> PoseResult:
+def answer(
+    model,
+    pts: np.ndarray,
+    viewpoint: np.ndarray,
+    up_pair,
+    opts: QueryOptions,
+    timings: dict,
+    t0: float,
+) -> PoseResult:
     """
     Return the PoseResult of a cleaned cloud pts seen from viewpoint (see PCRP.estimate).
 
@@ -33,7 +40,9 @@ def answer(model, pts: np.ndarray, viewpoint: np.ndarray, up_pair, opts: QueryOp
     """
     rng = np.random.default_rng(opts.seed)
     up, up_object = (None, None) if up_pair is None else up_pair
-    match = model.matcher.match(pts - viewpoint, model.instance_options, up, up_object, rng, timings)
+    match = model.matcher.match(
+        pts - viewpoint, model.instance_options, up, up_object, rng, timings
+    )
     best = match.best
     if model.view_calibration is not None:
         confidence = model.view_calibration.probability(features(match, len(pts)))
@@ -43,12 +52,30 @@ def answer(model, pts: np.ndarray, viewpoint: np.ndarray, up_pair, opts: QueryOp
     timings['total'] = time.perf_counter() - t0
     ids = model.gallery.ids
     return PoseResult(
-        gallery_id=ids[best.index], category=model.gallery.categories[best.index],
-        rotation=best.R, translation=best.t + viewpoint, scale=1.0, score=1.0 - best.fit.cost / 2,
-        confidence=confidence, fitness=best.fit.fit, inlier_rmse=best.fit.rms, chamfer=best.fit.cost,
+        gallery_id=ids[best.index],
+        category=model.gallery.categories[best.index],
+        rotation=best.R,
+        translation=best.t + viewpoint,
+        scale=1.0,
+        score=1.0 - best.fit.cost / 2,
+        confidence=confidence,
+        fitness=best.fit.fit,
+        inlier_rmse=best.fit.rms,
+        chamfer=best.fit.cost,
         rejected=rejected,
-        reason=f'confidence {confidence:.2f} below min_confidence {opts.min_confidence:.2f}' if rejected else '',
+        reason=(
+            f'confidence {confidence:.2f} below min_confidence {opts.min_confidence:.2f}'
+            if rejected
+            else ''
+        ),
         candidates=tuple((ids[c.index], c.fit.cost) for c in [best] + match.others),
-        twins=tuple(g for pair in model.meta.get('twins') or () if ids[best.index] in pair
-                    for g in pair if g != ids[best.index]),
-        timings=timings, n_points=len(pts))
+        twins=tuple(
+            g
+            for pair in model.meta.get('twins') or ()
+            if ids[best.index] in pair
+            for g in pair
+            if g != ids[best.index]
+        ),
+        timings=timings,
+        n_points=len(pts),
+    )

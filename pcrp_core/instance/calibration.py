@@ -39,8 +39,19 @@ CALIBRATION_SEED = 2_000_003
 # views answered for calibration, in all: enough for a logistic regression of a dozen features
 # whatever the gallery's size, so each object of a small gallery gets more (at most 12 per kind)
 CALIBRATION_VIEWS = 600
-FEATURES = ('cost', 'unexplained', 'unshown', 'fit', 'coverage', 'margin', 'coarse_margin', 'rms_ratio',
-            'log_points', 'off_noise', 'missing_noise')
+FEATURES = (
+    'cost',
+    'unexplained',
+    'unshown',
+    'fit',
+    'coverage',
+    'margin',
+    'coarse_margin',
+    'rms_ratio',
+    'log_points',
+    'off_noise',
+    'missing_noise',
+)
 TWIN_RATIO = 1.4
 POSE_RIGHT = 0.1   # of the object's diameter, as ADD-S counts it
 
@@ -51,14 +62,26 @@ def features(match, n_points: int) -> dict:
     second = min((c.fit.cost for c in match.others), default=2.0)
     coarse = [c for c, _ in match.coarse]
     noise = max(match.noise, 1e-6)
-    return {'cost': best.cost, 'unexplained': best.unexplained, 'unshown': best.unshown, 'fit': best.fit,
-            'coverage': best.coverage, 'margin': max(second, best.cost) - best.cost,
-            'coarse_margin': float(np.log(max(coarse[1], 1e-9) / max(coarse[0], 1e-9))) if len(coarse) > 1 else 2.0,
-            'rms_ratio': best.rms / match.tau, 'log_points': float(np.log(max(n_points, 1))),
-            'off_noise': best.median_off / noise, 'missing_noise': best.median_missing / noise}
+    return {
+        'cost': best.cost,
+        'unexplained': best.unexplained,
+        'unshown': best.unshown,
+        'fit': best.fit,
+        'coverage': best.coverage,
+        'margin': max(second, best.cost) - best.cost,
+        'coarse_margin': (
+            float(np.log(max(coarse[1], 1e-9) / max(coarse[0], 1e-9))) if len(coarse) > 1 else 2.0
+        ),
+        'rms_ratio': best.rms / match.tau,
+        'log_points': float(np.log(max(n_points, 1))),
+        'off_noise': best.median_off / noise,
+        'missing_noise': best.median_missing / noise,
+    }
 
 
-def calibration_views(meshes: list, up_axis, views_per_object: int = 2, seed: int = CALIBRATION_SEED):
+def calibration_views(
+    meshes: list, up_axis, views_per_object: int = 2, seed: int = CALIBRATION_SEED
+):
     """
     (object index, Scene) pairs: views_per_object per object and kind, alternately occluded.
 
@@ -66,7 +89,11 @@ def calibration_views(meshes: list, up_axis, views_per_object: int = 2, seed: in
     """
     from pcrp_core.evaluation.scenes import sample_scene
 
-    kinds = ('free', 'table') if up_axis is not None and np.allclose(up_axis, [0.0, 0.0, 1.0]) else ('free',)
+    kinds = (
+        ('free', 'table')
+        if up_axis is not None and np.allclose(up_axis, [0.0, 0.0, 1.0])
+        else ('free',)
+    )
     return [(i, sample_scene(mesh, str(i), i, v, kind, occlusion=v % 2 == 1, seed=seed))
             for i, mesh in enumerate(meshes) for kind in kinds for v in range(views_per_object)]
 
@@ -87,11 +114,22 @@ def answer_view(model, index: int, scene) -> dict:
     for name, exclude in (('known', ()), ('unknown', (index,))):
         if exclude and len(tpl) < 2:   # a gallery of one object has nothing to answer with instead
             continue
-        m = model.matcher.match(points, model.instance_options, up, up_object, np.random.default_rng(0),
-                                exclude=exclude)
+        m = model.matcher.match(
+            points,
+            model.instance_options,
+            up,
+            up_object,
+            np.random.default_rng(0),
+            exclude=exclude,
+        )
         b = m.best
         error = float(cKDTree(tpl.points[b.index] @ b.R.T + b.t).query(truth)[0].mean())
-        out[name] = {'features': features(m, len(points)), 'answer': b.index, 'cost': b.fit.cost, 'error': error}
+        out[name] = {
+            'features': features(m, len(points)),
+            'answer': b.index,
+            'cost': b.fit.cost,
+            'error': error,
+        }
     return out
 
 
@@ -137,7 +175,9 @@ def labelled_samples(views: list[dict], twins: list[tuple[int, int]]) -> tuple[l
     return X, y
 
 
-def calibrate(model, meshes: list, n_jobs=None, progress=None, views_per_object: int | None = None):
+def calibrate(
+    model, meshes: list, n_jobs=None, progress=None, views_per_object: int | None = None
+):
     """
     Learn the calibration of the model's instance answers on views of its own meshes.
 
@@ -152,7 +192,9 @@ def calibrate(model, meshes: list, n_jobs=None, progress=None, views_per_object:
         kinds = 2 if model.up_axis is not None else 1
         views_per_object = int(np.clip(CALIBRATION_VIEWS // (kinds * len(meshes)), 2, 12))
     views = calibration_views(meshes, model.up_axis, views_per_object)
-    answered = parallel_map(calibration_answers, views, {'model': model}, n_jobs, progress, 'calibration')
+    answered = parallel_map(
+        calibration_answers, views, {'model': model}, n_jobs, progress, 'calibration'
+    )
     twins = find_twins(answered)
     X, y = labelled_samples(answered, twins)
     ids = model.gallery.ids

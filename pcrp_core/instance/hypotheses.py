@@ -44,8 +44,9 @@ class QueryView:
         self.signature = signature(points, self.frame, self.centre)
 
 
-def from_views(query: QueryView, frames: np.ndarray, signatures: np.ndarray, view_centres: np.ndarray,
-               n: int):
+def from_views(
+    query: QueryView, frames: np.ndarray, signatures: np.ndarray, view_centres: np.ndarray, n: int
+):
     """
     Return poses from the n (view, roll) pairs whose silhouettes agree best with the query's.
 
@@ -79,8 +80,15 @@ def upright(query: QueryView, up_camera: np.ndarray, up_object: np.ndarray, came
     return R, t, view
 
 
-def coarse_cost(R: np.ndarray, t: np.ndarray, view: np.ndarray, query_sample: np.ndarray,
-                surface_tree: cKDTree, view_samples: np.ndarray, query_tree: cKDTree) -> np.ndarray:
+def coarse_cost(
+    R: np.ndarray,
+    t: np.ndarray,
+    view: np.ndarray,
+    query_sample: np.ndarray,
+    surface_tree: cKDTree,
+    view_samples: np.ndarray,
+    query_tree: cKDTree,
+) -> np.ndarray:
     """
     Return a cheap cost per pose, (H,).
 

@@ -80,9 +80,14 @@ class InstanceMatcher:
             tpl = self.templates
             points, normals = tpl.points[i], tpl.normals[i]
             # copies: Open3D refuses read-only arrays (a worker process's memory-mapped model)
-            cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.array(points, dtype=np.float64)))
+            cloud = o3d.geometry.PointCloud(
+                o3d.utility.Vector3dVector(np.array(points, dtype=np.float64))
+            )
             cloud.normals = o3d.utility.Vector3dVector(np.array(normals, dtype=np.float64))
-            self._surfaces[i] = (Surface(points, normals, cKDTree(points), float(tpl.spacing[i])), cloud)
+            self._surfaces[i] = (
+                Surface(points, normals, cKDTree(points), float(tpl.spacing[i])),
+                cloud,
+            )
         return self._surfaces[i]
 
     def shortlist(self, shape: np.ndarray, n: int, exclude=()) -> np.ndarray:
@@ -114,17 +119,27 @@ class InstanceMatcher:
         query, noise = query_surface(points)
         tau = max(opts.fit_tolerance, opts.noise_tolerance * noise)
         view = hypotheses.QueryView(points)
-        sample = points[rng.choice(len(points), min(opts.score_points, len(points)), replace=False)]
+        sample = points[
+            rng.choice(len(points), min(opts.score_points, len(points)), replace=False)
+        ]
         clock.lap('description')
         ranked = []
         for i in self.shortlist(shape_code(points), opts.shortlist, exclude):
             if up is not None and up_object is not None:
-                R, t, v = hypotheses.upright(view, up, up_object, tpl.cameras[i], tpl.view_centres[i],
-                                             opts.yaw_steps)
+                R, t, v = hypotheses.upright(
+                    view, up, up_object, tpl.cameras[i], tpl.view_centres[i], opts.yaw_steps
+                )
             else:
-                R, t, v = hypotheses.from_views(view, tpl.frames[i], tpl.signatures[i], tpl.view_centres[i],
-                                                opts.silhouette_poses)
-            cost = hypotheses.coarse_cost(R, t, v, sample, self.surface(i)[0].tree, tpl.samples[i], query.tree)
+                R, t, v = hypotheses.from_views(
+                    view,
+                    tpl.frames[i],
+                    tpl.signatures[i],
+                    tpl.view_centres[i],
+                    opts.silhouette_poses,
+                )
+            cost = hypotheses.coarse_cost(
+                R, t, v, sample, self.surface(i)[0].tree, tpl.samples[i], query.tree
+            )
             best = np.argsort(cost)[: opts.poses_refined]
             ranked.append((float(cost[best[0]]), int(i), R[best], t[best]))
         ranked.sort(key=lambda r: r[0])
@@ -134,7 +149,9 @@ class InstanceMatcher:
         best_of: dict[int, Candidate] = {}
         # objects whose best hypothesis costs far more than the best object's are not refined:
         # on validation views the right object's coarse cost was within 1.6 times the best's
-        within = [r for r in ranked[: opts.objects_refined] if r[0] <= opts.coarse_ratio * ranked[0][0]]
+        within = [
+            r for r in ranked[: opts.objects_refined] if r[0] <= opts.coarse_ratio * ranked[0][0]
+        ]
         for _, i, Rs, ts in within:
             reach = float(np.clip(0.15 * tpl.diameter[i], 2 * tau, 0.03))
             stages = ((reach, reach / 2, 30), (2 * tau, tau, 20))

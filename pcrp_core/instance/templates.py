@@ -111,7 +111,11 @@ class Templates:
         if prefix + 'points' not in arrays:
             return None
         n = int(arrays[prefix + 'visible_count'])
-        values = {f.name: arrays[prefix + f.name].astype(np.float64) for f in fields(cls) if f.name != 'visible'}
+        values = {
+            f.name: arrays[prefix + f.name].astype(np.float64)
+            for f in fields(cls)
+            if f.name != 'visible'
+        }
         visible = np.unpackbits(arrays[prefix + 'visible_bits'], axis=-1, count=n).astype(bool)
         return cls(visible=visible, **values)
 
@@ -134,7 +138,9 @@ def _surface(mesh: Mesh, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     points = np.asarray(m.sample_points_poisson_disk(n, init_factor=5).points)
     scene = o3d.t.geometry.RaycastingScene()
     scene.add_triangles(o3d.t.geometry.TriangleMesh.from_legacy(m))
-    normals = scene.compute_closest_points(o3d.core.Tensor(points.astype(np.float32)))['primitive_normals']
+    normals = scene.compute_closest_points(o3d.core.Tensor(points.astype(np.float32)))[
+        'primitive_normals'
+    ]
     return points, normals.numpy().astype(np.float64)
 
 
@@ -158,8 +164,13 @@ def object_templates(mesh: Mesh, settings: TemplateSettings = TemplateSettings()
         R, t = look_at(position, centre)
         seen = renderer.view(R, t)
         if len(seen) < 3:   # nothing seen from there (cannot happen for a closed surface)
-            seen = points[visible[np.argmax(sphere_directions(settings.visibility_directions) @ d)]] @ R.T + t
-        seen = (downsample(seen, settings.view_points, seed) - t) @ R      # back into the object's frame
+            seen = (
+                points[visible[np.argmax(sphere_directions(settings.visibility_directions) @ d)]]
+                @ R.T
+                + t
+            )
+        # back into the object's frame
+        seen = (downsample(seen, settings.view_points, seed) - t) @ R
         c = seen.mean(axis=0)
         frame = ray_frame(c - position, R[0])
         cams.append(position)
@@ -167,13 +178,23 @@ def object_templates(mesh: Mesh, settings: TemplateSettings = TemplateSettings()
         frames.append(frame)
         sigs.append(signature(seen, frame, c))
         shapes.append(shape_code(seen))
-        samples.append(seen[rng.choice(len(seen), settings.view_samples, replace=len(seen) < settings.view_samples)])
-    return dict(points=points, normals=normals, spacing=np.sqrt(area / len(points)), diameter=diameter,
-                centre=centre, visible=visible, cameras=np.array(cams), view_centres=np.array(centres),
-                frames=np.array(frames), signatures=np.array(sigs), shapes=np.array(shapes),
-                samples=np.array(samples))
+        samples.append(
+            seen[
+                rng.choice(
+                    len(seen), settings.view_samples, replace=len(seen) < settings.view_samples
+                )
+            ]
+        )
+    return {'points': points, 'normals': normals, 'spacing': np.sqrt(area / len(points)),
+            'diameter': diameter, 'centre': centre, 'visible': visible, 'cameras': np.array(cams),
+            'view_centres': np.array(centres), 'frames': np.array(frames),
+            'signatures': np.array(sigs), 'shapes': np.array(shapes), 'samples': np.array(samples)}
 
 
 def stack(per_object: list[dict]) -> Templates:
-    return Templates(**{f.name: np.stack([np.asarray(o[f.name]) for o in per_object]) for f in fields(Templates)})
-
+    return Templates(
+        **{
+            f.name: np.stack([np.asarray(o[f.name]) for o in per_object])
+            for f in fields(Templates)
+        }
+    )

@@ -72,7 +72,9 @@ def distances(points: np.ndarray, surface: Surface, k: int = 3) -> np.ndarray:
     spacings (at an edge, one of them is on the right face), else to the nearest point itself.
     """
     d, i = surface.tree.query(points, k)
-    along_normal = np.abs(np.einsum('nkj,nkj->nk', points[:, None] - surface.points[i], surface.normals[i]))
+    along_normal = np.abs(
+        np.einsum('nkj,nkj->nk', points[:, None] - surface.points[i], surface.normals[i])
+    )
     near = d < 2.0 * surface.spacing
     return np.where(near.any(axis=1), np.where(near, along_normal, np.inf).min(axis=1), d[:, 0])
 

@@ -39,7 +39,9 @@ def load_source(spec: str, split: str = 'train', n_points: int = 1024, seed: int
     if spec == 'household' or spec.startswith('household:'):
         from pcrp_core.sources.household import household_gallery
 
-        return household_gallery(int(spec.split(':', 1)[1]) if ':' in spec else None, seed=seed, n_points=n_points)
+        return household_gallery(
+            int(spec.split(':', 1)[1]) if ':' in spec else None, seed=seed, n_points=n_points
+        )
     if spec == 'procedural' or spec.startswith('procedural:'):
         from pcrp_core.sources.procedural import generate_gallery
 

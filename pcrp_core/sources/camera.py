@@ -46,7 +46,9 @@ class PinholeCamera:
     def project(self, points: np.ndarray) -> np.ndarray:
         """(N, 2) pixel coordinates (u, v) of points in the optical frame (z > 0)."""
         z = points[:, 2]
-        return np.column_stack([self.fx * points[:, 0] / z + self.cx, self.fy * points[:, 1] / z + self.cy])
+        return np.column_stack(
+            [self.fx * points[:, 0] / z + self.cx, self.fy * points[:, 1] / z + self.cy]
+        )
 
     def window(self, points: np.ndarray, margin: int = 2) -> tuple[int, int, int, int] | None:
         """
@@ -98,7 +100,9 @@ class Mesh:
         import open3d as o3d
 
         m = o3d.io.read_triangle_mesh(str(path))
-        return cls(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.triangles, dtype=np.int64))
+        return cls(
+            np.asarray(m.vertices, dtype=np.float64), np.asarray(m.triangles, dtype=np.int64)
+        )
 
     def moved(self, R: np.ndarray, t: np.ndarray) -> 'Mesh':
         return Mesh(self.vertices @ np.asarray(R).T + np.asarray(t), self.triangles)
@@ -179,12 +183,16 @@ class MeshCamera:
             return np.zeros((0, 3))
         u0, v0, u1, v1 = box
         u, v = np.meshgrid(np.arange(u0, u1), np.arange(v0, v1))
-        dirs = np.stack([(u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, np.ones(u.shape)], -1).reshape(-1, 3)
+        dirs = np.stack(
+            [(u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, np.ones(u.shape)], -1
+        ).reshape(-1, 3)
         depth = self._cast(np.broadcast_to(-R.T @ t, dirs.shape), dirs @ R)
         hit = np.isfinite(depth)
         return dirs[hit] * depth[hit, None]
 
-    def sees(self, position: np.ndarray, points: np.ndarray, tolerance: float = 1e-3) -> np.ndarray:
+    def sees(
+        self, position: np.ndarray, points: np.ndarray, tolerance: float = 1e-3
+    ) -> np.ndarray:
         """
         Return (N,) whether each point on the mesh (mesh frame) is what a camera at position sees.
 
@@ -218,7 +226,9 @@ def render_depth(meshes: list[Mesh], camera: PinholeCamera) -> tuple[np.ndarray,
     ids = [scene.add_triangles(o3d.core.Tensor(m.vertices.astype(np.float32)),
                                o3d.core.Tensor(m.triangles.astype(np.uint32))) for m in meshes]
     u, v = np.meshgrid(np.arange(u0, u1), np.arange(v0, v1))
-    dirs = np.stack([(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], axis=-1)
+    dirs = np.stack(
+        [(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones(u.shape)], axis=-1
+    )
     rays = np.concatenate([np.zeros_like(dirs), dirs], axis=-1).astype(np.float32)
     hit = scene.cast_rays(o3d.core.Tensor(rays))
     t = hit['t_hit'].numpy()
@@ -231,7 +241,9 @@ def render_depth(meshes: list[Mesh], camera: PinholeCamera) -> tuple[np.ndarray,
     return depth, owner
 
 
-def depth_points(depth: np.ndarray, camera: PinholeCamera, mask: np.ndarray | None = None) -> np.ndarray:
+def depth_points(
+    depth: np.ndarray, camera: PinholeCamera, mask: np.ndarray | None = None
+) -> np.ndarray:
     """
     Return the pixels with finite depth as (N, 3) points in the optical frame.
 
@@ -243,8 +255,14 @@ def depth_points(depth: np.ndarray, camera: PinholeCamera, mask: np.ndarray | No
     return np.column_stack([(u - camera.cx) / camera.fx * z, (v - camera.cy) / camera.fy * z, z])
 
 
-def view_of(mesh: Mesh, R: np.ndarray, t: np.ndarray, camera: PinholeCamera = PinholeCamera(),
-            noise: RangeNoise | None = RangeNoise(), rng: np.random.Generator | None = None) -> np.ndarray:
+def view_of(
+    mesh: Mesh,
+    R: np.ndarray,
+    t: np.ndarray,
+    camera: PinholeCamera = PinholeCamera(),
+    noise: RangeNoise | None = RangeNoise(),
+    rng: np.random.Generator | None = None,
+) -> np.ndarray:
     """
     Return (N, 3) what the camera measures of one mesh placed at p_camera = R @ p_mesh + t.
 

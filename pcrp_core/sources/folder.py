@@ -81,12 +81,19 @@ def read_object(path, n_points: int, seed: int = 0) -> tuple[np.ndarray, Mesh | 
         if len(mesh.triangles) > 0:
             o3d.utility.random.seed(seed)
             points = np.asarray(mesh.sample_points_uniformly(4 * n_points).points)
-            return points, Mesh(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.triangles, dtype=np.int64))
+            return points, Mesh(
+                np.asarray(mesh.vertices, dtype=np.float64),
+                np.asarray(mesh.triangles, dtype=np.int64),
+            )
     return read_points(path, n_points, seed), None
 
 
 def _usable(folder: Path) -> list[Path]:
-    return sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in MESH_SUFFIXES | CLOUD_SUFFIXES)
+    return sorted(
+        p
+        for p in folder.iterdir()
+        if p.is_file() and p.suffix.lower() in MESH_SUFFIXES | CLOUD_SUFFIXES
+    )
 
 
 def load_folder(root, n_points: int = 1024, seed: int = 0, limit: int | None = None):
@@ -110,8 +117,12 @@ def load_folder(root, n_points: int = 1024, seed: int = 0, limit: int | None = N
             if mesh is None and len(pts) > n_points:
                 pts = pts[np.random.default_rng(seed).choice(len(pts), n_points, replace=False)]
             gallery_id = f.stem if category is None else f'{category}/{f.stem}'
-            objects.append(GalleryObject(gallery_id, category or f.stem, pts.astype(np.float32), mesh=mesh))
+            objects.append(
+                GalleryObject(gallery_id, category or f.stem, pts.astype(np.float32), mesh=mesh)
+            )
     if not objects:
-        raise ValueError(f'{root}: nothing usable found (expected mesh or cloud files, one object each, or '
-                         f'sub-folders of them, one per category)')
+        raise ValueError(
+            f'{root}: nothing usable found (expected mesh or cloud files, one object each, or '
+            f'sub-folders of them, one per category)'
+        )
     return objects

@@ -28,4 +28,5 @@ class GalleryObject:
     category: str
     points: np.ndarray   # (N, 3) float32, the object's own canonical frame and units
     up: str | None = None   # which canonical axis is up ("z", "-y", ...), when the source says
-    mesh: Mesh | None = None   # the surface, when the source is a mesh: what a camera's views are rendered from
+    # the surface, when the source is a mesh: what a camera's views are rendered from
+    mesh: Mesh | None = None

@@ -64,7 +64,9 @@ def lathe(profile, segments: int = SEGMENTS) -> Mesh:
 def box(size, centre=(0.0, 0.0, 0.0)) -> Mesh:
     """Make an axis-aligned box of size (x, y, z) about centre."""
     sx, sy, sz = np.asarray(size, dtype=np.float64) / 2
-    v = np.array([[x, y, z] for x in (-sx, sx) for y in (-sy, sy) for z in (-sz, sz)]) + np.asarray(centre)
+    v = np.array(
+        [[x, y, z] for x in (-sx, sx) for y in (-sy, sy) for z in (-sz, sz)]
+    ) + np.asarray(centre)
     faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
     tris = [[f[0], f[1], f[2]] for f in faces] + [[f[0], f[2], f[3]] for f in faces]
     return Mesh(v, np.array(tris, dtype=np.int64))
@@ -90,7 +92,16 @@ def _cylinder(r, h):
 
 def _vessel(r_bottom, r_top, h, wall, bottom=0.006):
     """Make a cup or bowl: outside up, over the rim, inside down to the floor."""
-    return lathe([(0, 0), (r_bottom, 0), (r_top, h), (r_top - wall, h), (r_bottom - wall, bottom), (0, bottom)])
+    return lathe(
+        [
+            (0, 0),
+            (r_bottom, 0),
+            (r_top, h),
+            (r_top - wall, h),
+            (r_bottom - wall, bottom),
+            (0, bottom),
+        ]
+    )
 
 
 def _ball(r, squash=1.0, rings=16):
@@ -110,7 +121,10 @@ def _bottle(r, h, p):
 
 
 def _hammer(length, p):
-    return union(box([0.025, 0.032, length], [0, 0, length / 2]), box([0.11, 0.03, 0.03], [0.025, 0, length]))
+    return union(
+        box([0.025, 0.032, length], [0, 0, length / 2]),
+        box([0.11, 0.03, 0.03], [0.025, 0, length]),
+    )
 
 
 def _drill(size, p):
@@ -125,7 +139,10 @@ def _bracket(a, b, p):
 
 
 def _spatula(length, p):
-    return union(box([0.07, 0.09, 0.003], [0, 0.045, 0.0015]), box([0.022, length, 0.012], [0, 0.09 + length / 2, 0.006]))
+    return union(
+        box([0.07, 0.09, 0.003], [0, 0.045, 0.0015]),
+        box([0.022, length, 0.012], [0, 0.09 + length / 2, 0.006]),
+    )
 
 
 def _cone(r, h, p):
@@ -133,7 +150,9 @@ def _cone(r, h, p):
 
 
 def _plate(r, p):
-    return lathe([(0, 0), (0.6 * r, 0), (r, 0.02), (r - 0.006, 0.022), (0.6 * r - 0.006, 0.006), (0, 0.006)])
+    return lathe(
+        [(0, 0), (0.6 * r, 0), (r, 0.02), (r - 0.006, 0.022), (0.6 * r - 0.006, 0.006), (0, 0.006)]
+    )
 
 
 def _crate(x, y, z, p):
@@ -145,10 +164,19 @@ def _crate(x, y, z, p):
 KINDS = {
     'can': (lambda p: _cylinder(p[0], p[1]), [(0.033, 0.033), (0.10, 0.10)]),
     'tall_can': (lambda p: _cylinder(p[0], p[1]), [(0.05, 0.05), (0.14, 0.14)]),
-    'cereal_box': (lambda p: box([p[0], p[1], p[2]], [0, 0, p[2] / 2]), [(0.07, 0.07), (0.19, 0.19), (0.25, 0.25)]),
-    'sugar_box': (lambda p: box([p[0], p[1], p[2]], [0, 0, p[2] / 2]), [(0.05, 0.05), (0.09, 0.09), (0.17, 0.17)]),
+    'cereal_box': (
+        lambda p: box([p[0], p[1], p[2]], [0, 0, p[2] / 2]),
+        [(0.07, 0.07), (0.19, 0.19), (0.25, 0.25)],
+    ),
+    'sugar_box': (
+        lambda p: box([p[0], p[1], p[2]], [0, 0, p[2] / 2]),
+        [(0.05, 0.05), (0.09, 0.09), (0.17, 0.17)],
+    ),
     'mug': (lambda p: _mug(p[0], p[1], p), [(0.04, 0.04), (0.09, 0.09)]),
-    'bowl': (lambda p: _vessel(p[0], p[1], p[2], 0.004), [(0.04, 0.04), (0.08, 0.08), (0.055, 0.055)]),
+    'bowl': (
+        lambda p: _vessel(p[0], p[1], p[2], 0.004),
+        [(0.04, 0.04), (0.08, 0.08), (0.055, 0.055)],
+    ),
     'bottle': (lambda p: _bottle(p[0], p[1], p), [(0.035, 0.035), (0.22, 0.22)]),
     'plate': (lambda p: _plate(p[0], p), [(0.12, 0.12)]),
     'ball': (lambda p: _ball(p[0]), [(0.035, 0.035)]),
@@ -169,7 +197,9 @@ def household_mesh(kind: str, params=None) -> Mesh:
     return builder([lo for lo, _ in ranges] if params is None else params)
 
 
-def household_gallery(n: int | None = None, seed: int = 0, n_points: int = 1024) -> list[GalleryObject]:
+def household_gallery(
+    n: int | None = None, seed: int = 0, n_points: int = 1024
+) -> list[GalleryObject]:
     """
     Return the shipped 16 objects (n None), or n objects of the same kinds.
 

@@ -22,7 +22,9 @@ import numpy as np
 from pcrp_core.sources.gallery_object import GalleryObject
 
 
-def load_archive(path, split: str = 'train', n_points: int = 1024, seed: int = 0, limit: int | None = None):
+def load_archive(
+    path, split: str = 'train', n_points: int = 1024, seed: int = 0, limit: int | None = None
+):
     path = Path(path)
     if split not in ('train', 'test'):
         raise ValueError(f'split must be train or test, got {split!r}')
@@ -30,7 +32,9 @@ def load_archive(path, split: str = 'train', n_points: int = 1024, seed: int = 0
         with np.load(path, allow_pickle=False) as npz:
             points, names = npz[f'{split}_points'], npz[f'{split}_names']
     except KeyError:
-        raise ValueError(f'{path}: not a ModelNet40 category archive (no {split}_points / {split}_names)') from None
+        raise ValueError(
+            f'{path}: not a ModelNet40 category archive (no {split}_points / {split}_names)'
+        ) from None
     if limit is not None:
         points, names = points[:limit], names[:limit]
     rng = np.random.default_rng(seed)
@@ -39,7 +43,9 @@ def load_archive(path, split: str = 'train', n_points: int = 1024, seed: int = 0
         if n_points < len(p):
             p = p[np.sort(rng.choice(len(p), n_points, replace=False))]
         # ModelNet's own axes: z up (its README; airplanes and cars are flattest along z)
-        objects.append(GalleryObject(str(name), path.stem, np.asarray(p, dtype=np.float32), up='z'))
+        objects.append(
+            GalleryObject(str(name), path.stem, np.asarray(p, dtype=np.float32), up='z')
+        )
     return objects
 
 

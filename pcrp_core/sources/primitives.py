@@ -30,7 +30,11 @@ def _rot_z(a):
 
 class Box:
     def __init__(self, centre, size, R=None):
-        self.c, self.s, self.R = np.asarray(centre, float), np.asarray(size, float), np.eye(3) if R is None else R
+        self.c, self.s, self.R = (
+            np.asarray(centre, float),
+            np.asarray(size, float),
+            np.eye(3) if R is None else R,
+        )
 
     def area(self):
         a, b, c = self.s
@@ -50,7 +54,12 @@ class Cylinder:
     """Closed cylinder along the local z axis, then rotated by R."""
 
     def __init__(self, centre, radius, length, R=None):
-        self.c, self.r, self.h, self.R = np.asarray(centre, float), radius, length, np.eye(3) if R is None else R
+        self.c, self.r, self.h, self.R = (
+            np.asarray(centre, float),
+            radius,
+            length,
+            np.eye(3) if R is None else R,
+        )
 
     def area(self):
         return 2 * np.pi * self.r * self.h + 2 * np.pi * self.r ** 2

@@ -44,15 +44,21 @@ def _chair(r):
     if r.random() < 0.3:   # pedestal with a star base (office chair)
         parts.append(Cylinder([0, 0, seat_h / 2], 0.03, seat_h))
         for a in np.arange(5) * 2 * np.pi / 5 + r.uniform(0, 1):
-            parts.append(Box([0.15 * np.cos(a), 0.15 * np.sin(a), 0.03], [0.3, 0.04, 0.04], ROT_Z(a)))
+            parts.append(
+                Box([0.15 * np.cos(a), 0.15 * np.sin(a), 0.03], [0.3, 0.04, 0.04], ROT_Z(a))
+            )
     else:
         leg = r.uniform(0.025, 0.05)
         for sx in (-1, 1):
             for sy in (-1, 1):
-                parts.append(Box([sx * (w / 2 - leg), sy * (d / 2 - leg), seat_h / 2], [leg, leg, seat_h]))
+                parts.append(
+                    Box([sx * (w / 2 - leg), sy * (d / 2 - leg), seat_h / 2], [leg, leg, seat_h])
+                )
     back_h, tilt = r.uniform(0.35, 0.7), r.uniform(0.0, 0.3)
     R = ROT_X(-tilt)
-    parts.append(Box(np.array([0, d / 2, seat_h]) + R @ [0, 0.02, back_h / 2], [w, 0.04, back_h], R))
+    parts.append(
+        Box(np.array([0, d / 2, seat_h]) + R @ [0, 0.02, back_h / 2], [w, 0.04, back_h], R)
+    )
     if r.random() < 0.4:
         for sx in (-1, 1):
             parts.append(Box([sx * w / 2, 0, seat_h + 0.2], [0.05, d * 0.9, 0.04]))
@@ -69,16 +75,32 @@ def _sofa(r):
     cushion = r.uniform(0.1, 0.18)
     for k in range(seats):
         y = -length / 2 + (k + 0.5) * length / seats
-        parts.append(Box([-0.05, y, leg_h + base_h + cushion / 2], [depth * 0.8, length / seats * 0.95, cushion]))
+        parts.append(
+            Box(
+                [-0.05, y, leg_h + base_h + cushion / 2],
+                [depth * 0.8, length / seats * 0.95, cushion],
+            )
+        )
     back_h, back_t = r.uniform(0.35, 0.6), r.uniform(0.15, 0.25)
-    parts.append(Box([depth / 2 - back_t / 2, 0, leg_h + base_h + back_h / 2], [back_t, length, back_h]))
+    parts.append(
+        Box([depth / 2 - back_t / 2, 0, leg_h + base_h + back_h / 2], [back_t, length, back_h])
+    )
     arm_h, arm_w = r.uniform(0.1, 0.35), r.uniform(0.08, 0.25)
     for s in (-1, 1):
-        parts.append(Box([0, s * (length / 2 + arm_w / 2), leg_h + (base_h + arm_h) / 2], [depth, arm_w, base_h + arm_h]))
+        parts.append(
+            Box(
+                [0, s * (length / 2 + arm_w / 2), leg_h + (base_h + arm_h) / 2],
+                [depth, arm_w, base_h + arm_h],
+            )
+        )
     if leg_h > 0:
         for sx in (-1, 1):
             for sy in (-1, 1):
-                parts.append(Cylinder([sx * (depth / 2 - 0.06), sy * (length / 2 - 0.06), leg_h / 2], 0.03, leg_h))
+                parts.append(
+                    Cylinder(
+                        [sx * (depth / 2 - 0.06), sy * (length / 2 - 0.06), leg_h / 2], 0.03, leg_h
+                    )
+                )
     return parts
 
 
@@ -94,18 +116,33 @@ def _car(r):
         cab_len, cab_y = L * r.uniform(0.25, 0.35), -L * r.uniform(0.02, 0.12)
         bed_y0, bed_y1 = cab_y + cab_len / 2, L / 2
         for s in (-1, 1):
-            parts.append(Box([s * W / 2, (bed_y0 + bed_y1) / 2, clear + body_h + 0.08], [0.04, bed_y1 - bed_y0, 0.16]))
+            parts.append(
+                Box(
+                    [s * W / 2, (bed_y0 + bed_y1) / 2, clear + body_h + 0.08],
+                    [0.04, bed_y1 - bed_y0, 0.16],
+                )
+            )
     else:
         cab_len = L * r.uniform(0.55, 0.7)
         cab_y = L / 2 - cab_len / 2 - 0.05
     # the windscreen slopes: a tilted slab at the cabin's front sets front apart from back
     parts.append(Box([0, cab_y, clear + body_h + cab_h / 2], [W * 0.9, cab_len, cab_h]))
     R = ROT_X(r.uniform(0.6, 1.0))
-    parts.append(Box([0, cab_y - cab_len / 2 - 0.08, clear + body_h + cab_h * 0.4], [W * 0.88, 0.3, 0.03], R))
+    parts.append(
+        Box(
+            [0, cab_y - cab_len / 2 - 0.08, clear + body_h + cab_h * 0.4], [W * 0.88, 0.3, 0.03], R
+        )
+    )
     for sy in (-1, 1):
         for sx in (-1, 1):
-            parts.append(Cylinder([sx * (W / 2 - 0.05), sy * (L / 2 - r.uniform(0.28, 0.38)), wheel_r],
-                                  wheel_r, 0.12, _AXIS_X))
+            parts.append(
+                Cylinder(
+                    [sx * (W / 2 - 0.05), sy * (L / 2 - r.uniform(0.28, 0.38)), wheel_r],
+                    wheel_r,
+                    0.12,
+                    _AXIS_X,
+                )
+            )
     return parts
 
 
@@ -116,12 +153,20 @@ def _airplane(r):
     wing_y, sweep = r.uniform(-0.1, 0.15) * L, r.uniform(0.0, 0.5)
     wing_z = r.choice([-0.6, 0.0, 0.6]) * rad
     for s in (-1, 1):
-        parts.append(Box([s * span / 4, wing_y + sweep * span / 4, wing_z], [span / 2, chord, 0.025], ROT_Z(-s * sweep)))
+        parts.append(
+            Box(
+                [s * span / 4, wing_y + sweep * span / 4, wing_z],
+                [span / 2, chord, 0.025],
+                ROT_Z(-s * sweep),
+            )
+        )
     tail_y = L / 2 - r.uniform(0.08, 0.15)
     tspan = span * r.uniform(0.25, 0.4)
     parts.append(Box([0, tail_y, rad * 0.3], [tspan, chord * 0.6, 0.02]))
     fin_h = r.uniform(0.2, 0.4)
-    parts.append(Box([0, tail_y, rad + fin_h / 2], [0.02, chord * 0.8, fin_h], ROT_X(r.uniform(0.0, 0.4))))
+    parts.append(
+        Box([0, tail_y, rad + fin_h / 2], [0.02, chord * 0.8, fin_h], ROT_X(r.uniform(0.0, 0.4)))
+    )
     for k in range(r.choice([0, 1, 2])):
         x = span * (0.18 + 0.15 * k)
         for s in (-1, 1):
@@ -135,19 +180,30 @@ _BUILDERS = {'airplane': _airplane, 'chair': _chair, 'sofa': _sofa, 'car': _car}
 def generate_object(category: str, seed: int, n_points: int = 1024) -> np.ndarray:
     """(n_points, 3) float32 surface points of one object, deterministic in (category, seed)."""
     if category not in _BUILDERS:
-        raise ValueError(f"unknown procedural category {category!r}; known: {', '.join(CATEGORIES)}")
+        raise ValueError(
+            f"unknown procedural category {category!r}; known: {', '.join(CATEGORIES)}"
+        )
     rng = np.random.default_rng([CATEGORIES.index(category), seed])
     pts = sample_parts(_BUILDERS[category](rng), n_points, rng)
     pts -= pts.mean(0)
     return (pts / np.linalg.norm(pts, axis=1).max()).astype(np.float32)
 
 
-def generate_gallery(n_per_category: int, seed: int = 0, n_points: int = 1024, split: str = 'train',
-                     categories=CATEGORIES):
+def generate_gallery(
+    n_per_category: int,
+    seed: int = 0,
+    n_points: int = 1024,
+    split: str = 'train',
+    categories=CATEGORIES,
+):
     offset = TEST_SEED_OFFSET if split == 'test' else 0
     objects = []
     for c in categories:
         for k in range(n_per_category):
             gid = f'proc_{c}_t{k:03d}' if split == 'test' else f'proc_{c}_{k:04d}'
-            objects.append(GalleryObject(gid, c, generate_object(c, seed * 10_000 + offset + k, n_points), up='z'))
+            objects.append(
+                GalleryObject(
+                    gid, c, generate_object(c, seed * 10_000 + offset + k, n_points), up='z'
+                )
+            )
     return objects

@@ -38,8 +38,15 @@ def sensor_view(points: np.ndarray, camera: np.ndarray, rng: np.random.Generator
     return (seen + rays * rng.normal(scale=noise_sigma, size=(len(seen), 1))).astype(np.float32)
 
 
-def partial_view(points: np.ndarray, rng: np.random.Generator, noise_sigma: float = 0.005,
-                 min_keep: float = 0.25, distance: float = 3.0, tries: int = 10, with_camera: bool = False):
+def partial_view(
+    points: np.ndarray,
+    rng: np.random.Generator,
+    noise_sigma: float = 0.005,
+    min_keep: float = 0.25,
+    distance: float = 3.0,
+    tries: int = 10,
+    with_camera: bool = False,
+):
     """
     Return the side of the object seen from a random direction at `distance` object radii.
 

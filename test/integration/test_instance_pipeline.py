@@ -70,7 +70,10 @@ def test_views_from_a_camera_are_answered_with_the_object_and_its_pose(mesh_mode
         r = model.estimate(scene.points, viewpoint=np.zeros(3))
         assert model.uses_views(np.zeros(3)) and 0.0 <= r.confidence <= 1.0
         same = r.gallery_id == name or (name == 'brick' and r.gallery_id == 'brick_copy')
-        pose = add_s(r.rotation, r.translation, scene.R, scene.t, model.templates.points[k]) < 0.1 * mesh.diameter
+        pose = (
+            add_s(r.rotation, r.translation, scene.R, scene.t, model.templates.points[k])
+            < 0.1 * mesh.diameter
+        )
         ok += same and pose
         if name.startswith('brick'):
             assert set(r.twins) | {r.gallery_id} == {'brick', 'brick_copy'}
@@ -102,5 +105,7 @@ def test_a_gallery_of_one_mesh_builds_and_answers():
     mesh = _mesh(SHAPES['can']())
     model = PCRP.build([GalleryObject('can', 'can', mesh.sample(1024), mesh=mesh)], n_jobs=1)
     assert model.meta['twins'] == []
-    r = model.estimate(sample_scene(mesh, 'can', 0, 0, 'free', seed=3).points, viewpoint=np.zeros(3))
+    r = model.estimate(
+        sample_scene(mesh, 'can', 0, 0, 'free', seed=3).points, viewpoint=np.zeros(3)
+    )
     assert r.gallery_id == 'can' and 0.0 < r.confidence <= 1.0

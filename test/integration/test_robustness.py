@@ -36,17 +36,41 @@ def _answer_or_reason(model, cloud):
     try:
         return model.estimate(cloud)
     except InvalidCloud as e:
-        assert e.reason in {'empty', 'no_finite_points', 'too_few_points', 'degenerate', 'bad_shape'}
+        assert e.reason in {
+            'empty',
+            'no_finite_points',
+            'too_few_points',
+            'degenerate',
+            'bad_shape',
+        }
         return e.reason
 
 
-@pytest.mark.parametrize('name, cloud', [
-    ('plane', np.column_stack([np.random.default_rng(0).uniform(-1, 1, (800, 2)), np.zeros(800)])),
-    ('sphere', (lambda v: v / np.linalg.norm(v, axis=1, keepdims=True))(np.random.default_rng(1).normal(size=(800, 3)))),
-    ('cube', np.random.default_rng(2).uniform(-1, 1, (800, 3)).round(0) * 0.5 + np.random.default_rng(3).uniform(-0.5, 0.5, (800, 3)) * [1, 1, 0]),
-    ('duplicated points', np.repeat(generate_object('chair', 1)[:100].astype(float), 10, axis=0)),
-    ('two points repeated', np.repeat([[0.0, 0, 0], [1, 1, 1]], 400, axis=0)),
-])
+@pytest.mark.parametrize(
+    'name, cloud',
+    [
+        (
+            'plane',
+            np.column_stack([np.random.default_rng(0).uniform(-1, 1, (800, 2)), np.zeros(800)]),
+        ),
+        (
+            'sphere',
+            (lambda v: v / np.linalg.norm(v, axis=1, keepdims=True))(
+                np.random.default_rng(1).normal(size=(800, 3))
+            ),
+        ),
+        (
+            'cube',
+            np.random.default_rng(2).uniform(-1, 1, (800, 3)).round(0) * 0.5
+            + np.random.default_rng(3).uniform(-0.5, 0.5, (800, 3)) * [1, 1, 0],
+        ),
+        (
+            'duplicated points',
+            np.repeat(generate_object('chair', 1)[:100].astype(float), 10, axis=0),
+        ),
+        ('two points repeated', np.repeat([[0.0, 0, 0], [1, 1, 1]], 400, axis=0)),
+    ],
+)
 def test_degenerate_geometry_is_answered_or_refused(model, name, cloud):
     out = _answer_or_reason(model, cloud)
     assert isinstance(out, str) or np.isfinite(out.transform).all()
@@ -55,7 +79,9 @@ def test_degenerate_geometry_is_answered_or_refused(model, name, cloud):
 def test_a_million_points_are_downsampled_and_answered_in_bounded_time(model):
     rng = np.random.default_rng(4)
     base = generate_object('sofa', 2, n_points=4096).astype(np.float64)
-    big = base[rng.integers(0, len(base), 1_000_000)] + rng.normal(scale=0.002, size=(1_000_000, 3))
+    big = base[rng.integers(0, len(base), 1_000_000)] + rng.normal(
+        scale=0.002, size=(1_000_000, 3)
+    )
     t0 = time.perf_counter()
     r = model.estimate(big)
     assert time.perf_counter() - t0 < 20.0
@@ -71,7 +97,9 @@ def test_far_from_the_origin_the_pose_is_still_right(model):
 
 
 def test_a_cloud_in_millimetres_is_answered_or_rejected_not_crashed(model):
-    out = _answer_or_reason(model, model.gallery_cloud('proc_car_0001').astype(np.float64) * 1000.0)
+    out = _answer_or_reason(
+        model, model.gallery_cloud('proc_car_0001').astype(np.float64) * 1000.0
+    )
     assert isinstance(out, str) or np.isfinite(out.transform).all()
     model.set_params(scale_mode='normalize')
     try:

@@ -53,13 +53,16 @@ def test_answers_keep_the_given_up_even_when_it_is_wrong(model, seed):
     """
     rng = np.random.default_rng(seed)
     R = Rotation.random(random_state=seed).as_matrix()
-    cloud = generate_object(['chair', 'sofa', 'car'][seed], 100_000 + seed).astype(np.float64) @ R.T + rng.normal(size=3)
+    cloud = generate_object(['chair', 'sofa', 'car'][seed], 100_000 + seed).astype(
+        np.float64
+    ) @ R.T + rng.normal(size=3)
     true_up = R @ model.up_axis
     right = model.estimate(cloud, up=true_up)
     assert _tilt(right, model, true_up) < model.pose_options.up_tolerance_deg
     assert np.degrees(Rotation.from_matrix(right.rotation @ R.T).magnitude()) < 15.0
     wrong = model.estimate(cloud, up=-true_up)
-    assert _tilt(wrong, model, -true_up) < model.pose_options.up_tolerance_deg + 15.0   # final ICP may tip it a little
+    # final ICP may tip it a little
+    assert _tilt(wrong, model, -true_up) < model.pose_options.up_tolerance_deg + 15.0
     assert _tilt(wrong, model, true_up) > 90.0
 
 
@@ -79,7 +82,10 @@ def test_an_unusable_up_or_a_model_without_an_up_axis_is_refused(model):
 
 def test_a_build_records_the_up_axis_its_sources_agree_on_or_the_one_given(tmp_path):
     def objects(ups):
-        return [GalleryObject(f'o{k}', 'chair', generate_object('chair', k), up=u) for k, u in enumerate(ups)]
+        return [
+            GalleryObject(f'o{k}', 'chair', generate_object('chair', k), up=u)
+            for k, u in enumerate(ups)
+        ]
     # what the sources say, asked directly (no model needs building to check it)
     assert common_up(objects(['z', 'z', 'z'])).tolist() == [0.0, 0.0, 1.0]
     assert common_up(objects(['z', 'y', 'z'])) is None       # disagree: none

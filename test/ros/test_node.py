@@ -338,5 +338,7 @@ def test_a_short_queue_absorbs_a_slow_answer_and_pushes_out_the_oldest(
             node.answerer._on_cloud('segmented_object', xyz_to_pointcloud2(cloud, _header(sec)))
         assert stats.counts['dropped_stale'] == dropped
         release.set()
-        assert wait_for(lambda: stats.counts['answered'] + stats.counts['rejected'] == answered, 30)
+        assert wait_for(
+            lambda: stats.counts['answered'] + stats.counts['rejected'] == answered, 30
+        )
         node.destroy_node()

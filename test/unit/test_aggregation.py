@@ -39,7 +39,9 @@ def test_vlad_ignores_point_order_and_tells_different_sets_apart(data):
     feats, rng = data
     vlad = VLAD(n_clusters=4).fit(feats)
     a = feats[:400]
-    np.testing.assert_allclose(vlad.transform(a), vlad.transform(a[rng.permutation(400)]), atol=1e-6)
+    np.testing.assert_allclose(
+        vlad.transform(a), vlad.transform(a[rng.permutation(400)]), atol=1e-6
+    )
     b = feats[400:]
     assert np.linalg.norm(vlad.transform(a) - vlad.transform(b)) > 0.3
 

@@ -98,5 +98,8 @@ def test_point_features_are_rotation_invariant(clouds, hop1):
     rel = np.linalg.norm(f1 - f2_aligned, axis=1) / np.linalg.norm(f1, axis=1)
     assert np.median(rel) < 0.01
     # and they are informative: features of different points differ far more
-    spread = np.linalg.norm(f1[:, None] - f1[None, :50], axis=2).mean() / np.linalg.norm(f1, axis=1).mean()
+    spread = (
+        np.linalg.norm(f1[:, None] - f1[None, :50], axis=2).mean()
+        / np.linalg.norm(f1, axis=1).mean()
+    )
     assert spread > 0.2

@@ -30,7 +30,9 @@ SMALL = TemplateSettings(views=16, visibility_directions=128, surface_points=512
 
 
 def _mesh(shape) -> Mesh:
-    return Mesh(np.asarray(shape.vertices, dtype=np.float64), np.asarray(shape.triangles, dtype=np.int64))
+    return Mesh(
+        np.asarray(shape.vertices, dtype=np.float64), np.asarray(shape.triangles, dtype=np.int64)
+    )
 
 
 def box(x, y, z) -> Mesh:
@@ -44,7 +46,9 @@ def test_a_roll_about_the_line_of_sight_shifts_the_signature_by_as_many_sectors(
     frame = ray_frame(pts.mean(0), np.array([1.0, 0.0, 0.0]))
     turn = Rotation.from_rotvec(frame[2] * np.radians(7 * 360 / SECTORS)).as_matrix()
     turned = (pts - pts.mean(0)) @ turn.T + pts.mean(0)
-    costs = shift_costs(signature(turned, frame, pts.mean(0)), signature(pts, frame, pts.mean(0))[None])
+    costs = shift_costs(
+        signature(turned, frame, pts.mean(0)), signature(pts, frame, pts.mean(0))[None]
+    )
     assert int(np.argmin(costs[0])) == 7 and costs[0].min() < 1e-4 < costs[0, 0]
 
 
@@ -75,7 +79,9 @@ def test_templates_survive_a_round_trip_through_arrays(brick):
     again = Templates.from_arrays({k: np.asarray(v) for k, v in tpl.to_arrays().items()})
     np.testing.assert_array_equal(again.visible, tpl.visible)
     np.testing.assert_allclose(again.signatures, tpl.signatures, rtol=1e-6)
-    assert len(again) == 1 and tpl.diameter[0] == pytest.approx(np.linalg.norm([0.12, 0.06, 0.03]), rel=1e-3)
+    assert len(again) == 1 and tpl.diameter[0] == pytest.approx(
+        np.linalg.norm([0.12, 0.06, 0.03]), rel=1e-3
+    )
 
 
 def test_visibility_looked_up_for_a_pose_is_the_side_facing_the_camera(brick):
@@ -90,30 +96,51 @@ def test_visibility_looked_up_for_a_pose_is_the_side_facing_the_camera(brick):
 def test_the_true_pose_costs_less_than_a_slightly_wrong_one_and_a_smaller_brick(brick):
     mesh, tpl, R, t, seen = brick
     query, noise = query_surface(seen)
-    surface = Surface(tpl.points[0], tpl.normals[0], __import__('scipy').spatial.cKDTree(tpl.points[0]),
-                      float(tpl.spacing[0]))
+    surface = Surface(
+        tpl.points[0],
+        tpl.normals[0],
+        __import__('scipy').spatial.cKDTree(tpl.points[0]),
+        float(tpl.spacing[0]),
+    )
     expected = visible_points(tpl.visible[0], tpl.directions, tpl.centre[0], R, t)
     right = judge(query, surface, expected, R, t, 0.003)
     off = Rotation.from_rotvec([0.0, 0.0, np.radians(8)]).as_matrix() @ R
     wrong = judge(query, surface, expected, off, t, 0.003)
-    assert right.cost < 0.05 and right.fit > 0.95 and right.coverage > 0.9 and wrong.cost > 3 * right.cost
+    assert (
+        right.cost < 0.05
+        and right.fit > 0.95
+        and right.coverage > 0.9
+        and wrong.cost > 3 * right.cost
+    )
     assert noise < 1e-3          # a noiseless render: points lie on their planes
     small = 0.8 * tpl.points[0]  # a brick 20 % smaller, posed the same way, cannot show all of it
-    surface_small = Surface(small, tpl.normals[0], __import__('scipy').spatial.cKDTree(small), float(tpl.spacing[0]))
+    surface_small = Surface(
+        small, tpl.normals[0], __import__('scipy').spatial.cKDTree(small), float(tpl.spacing[0])
+    )
     assert judge(query, surface_small, expected, R, t, 0.003).cost > 5 * right.cost
 
 
 def test_distances_to_a_plane_do_not_count_the_sampling_gap():
-    grid = np.stack(np.meshgrid(np.arange(0, 0.1, 0.01), np.arange(0, 0.1, 0.01), [0.0]), -1).reshape(-1, 3)
-    plane = Surface(grid, np.tile([0.0, 0.0, 1.0], (len(grid), 1)), __import__('scipy').spatial.cKDTree(grid), 0.01)
-    between = np.array([[0.045, 0.055, 0.002]])      # 7 mm from the nearest grid point, 2 mm off the plane
+    grid = np.stack(
+        np.meshgrid(np.arange(0, 0.1, 0.01), np.arange(0, 0.1, 0.01), [0.0]), -1
+    ).reshape(-1, 3)
+    plane = Surface(
+        grid,
+        np.tile([0.0, 0.0, 1.0], (len(grid), 1)),
+        __import__('scipy').spatial.cKDTree(grid),
+        0.01,
+    )
+    # 7 mm from the nearest grid point, 2 mm off the plane
+    between = np.array([[0.045, 0.055, 0.002]])
     assert distances(between, plane)[0] == pytest.approx(0.002)
 
 
 def test_view_hypotheses_include_the_true_pose_of_a_brick(brick):
     _, tpl, R, t, seen = brick
     view = hypotheses.QueryView(seen)
-    Rs, ts, _ = hypotheses.from_views(view, tpl.frames[0], tpl.signatures[0], tpl.view_centres[0], 8)
+    Rs, ts, _ = hypotheses.from_views(
+        view, tpl.frames[0], tpl.signatures[0], tpl.view_centres[0], 8
+    )
     # a brick has four poses that look alike (its symmetries): any of them is right
     sym = [np.diag(d) for d in ([1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1])]
     best = min(np.degrees(np.arccos(np.clip((np.trace(Rh.T @ R @ S) - 1) / 2, -1, 1)))
@@ -123,9 +150,13 @@ def test_view_hypotheses_include_the_true_pose_of_a_brick(brick):
 
 def test_upright_hypotheses_keep_the_up_axis_on_the_given_up():
     tpl_cameras = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
-    view = hypotheses.QueryView(np.random.default_rng(1).normal(size=(200, 3)) * 0.02 + [0, 0, 0.6])
+    view = hypotheses.QueryView(
+        np.random.default_rng(1).normal(size=(200, 3)) * 0.02 + [0, 0, 0.6]
+    )
     up = np.array([0.0, -0.8, -0.6])
-    R, t, v = hypotheses.upright(view, up, np.array([0.0, 0.0, 1.0]), tpl_cameras, np.zeros((3, 3)), 12)
+    R, t, v = hypotheses.upright(
+        view, up, np.array([0.0, 0.0, 1.0]), tpl_cameras, np.zeros((3, 3)), 12
+    )
     np.testing.assert_allclose(R @ [0.0, 0.0, 1.0], np.tile(up, (12, 1)), atol=1e-12)
     assert len(set(np.round(np.degrees(np.arctan2(R[:, 1, 0], R[:, 0, 0]))))) == 12
 

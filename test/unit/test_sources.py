@@ -26,7 +26,11 @@ from scipy.spatial import cKDTree
 
 @pytest.mark.parametrize('category', CATEGORIES)
 def test_generated_objects_are_deterministic_varied_normalised_and_have_a_front(category):
-    a, b, other = generate_object(category, 3), generate_object(category, 3), generate_object(category, 4)
+    a, b, other = (
+        generate_object(category, 3),
+        generate_object(category, 3),
+        generate_object(category, 4),
+    )
     np.testing.assert_array_equal(a, b)
     assert cKDTree(other).query(a)[0].mean() > 0.02
     np.testing.assert_allclose(a.mean(0), 0, atol=1e-5)
@@ -46,7 +50,9 @@ def test_procedural_train_and_test_splits_differ_and_ids_are_unique():
 @pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
 def test_modelnet_archives_give_official_names_and_the_category():
     objs = load_source(str(MODELNET / 'sofa.npz'), split='test', limit_per_category=3)
-    assert [o.gallery_id for o in objs][0].startswith('sofa_') and {o.category for o in objs} == {'sofa'}
+    assert [o.gallery_id for o in objs][0].startswith('sofa_') and {o.category for o in objs} == {
+        'sofa'
+    }
     assert objs[0].points.shape == (1024, 3) and objs[0].points.dtype == np.float32
 
 
@@ -62,7 +68,9 @@ def test_folders_of_meshes_and_clouds_load_and_broken_files_are_skipped(tmp_path
     assert ids == ['ball/b1', 'box/crate']
     crate = next(o for o in objs if o.gallery_id == 'box/crate')
     # a mesh is sampled densely (the build thins it evenly) and kept, to render views from
-    assert crate.points.shape == (1200, 3) and crate.points[:, 0].max() == pytest.approx(2.0, abs=1e-3)
+    assert crate.points.shape == (1200, 3) and crate.points[:, 0].max() == pytest.approx(
+        2.0, abs=1e-3
+    )
     assert crate.mesh is not None and len(crate.mesh.triangles) == 12
     assert next(o for o in objs if o.gallery_id == 'ball/b1').mesh is None
     assert 'broken.ply' in caplog.text
@@ -72,11 +80,18 @@ def test_folders_of_meshes_and_clouds_load_and_broken_files_are_skipped(tmp_path
 
 def test_a_flat_folder_of_meshes_is_one_object_per_file(tmp_path):
     # as ../shared/data/ycb is laid out: <id>_<name>.ply side by side, no category folders
-    o3d.io.write_triangle_mesh(str(tmp_path / '002_can.ply'), o3d.geometry.TriangleMesh.create_cylinder(0.05, 0.12))
-    o3d.io.write_triangle_mesh(str(tmp_path / '003_box.ply'), o3d.geometry.TriangleMesh.create_box(0.07, 0.16, 0.21))
+    o3d.io.write_triangle_mesh(
+        str(tmp_path / '002_can.ply'), o3d.geometry.TriangleMesh.create_cylinder(0.05, 0.12)
+    )
+    o3d.io.write_triangle_mesh(
+        str(tmp_path / '003_box.ply'), o3d.geometry.TriangleMesh.create_box(0.07, 0.16, 0.21)
+    )
     (tmp_path / 'README.md').write_text('not an object')
     objs = load_source(str(tmp_path), n_points=256)
-    assert [(o.gallery_id, o.category) for o in objs] == [('002_can', '002_can'), ('003_box', '003_box')]
+    assert [(o.gallery_id, o.category) for o in objs] == [
+        ('002_can', '002_can'),
+        ('003_box', '003_box'),
+    ]
     assert all(o.mesh is not None for o in objs)
     assert objs[1].points.max(axis=0) == pytest.approx([0.07, 0.16, 0.21], abs=2e-3)
 
