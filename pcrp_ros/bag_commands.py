@@ -29,10 +29,14 @@ UP_IN_LEVEL_CAMERA = [0.0, -1.0, 0.0]
 
 
 def answer_quality(model, gallery_id: str, R, t, truth: dict) -> dict:
-    """How right an answer is against a bag's ground truth: the rotation error (degrees; blind to
-    symmetry) and the surface error as ADD-S counts it (the true object's points where the truth
-    puts them, to the nearest of the answer's object's points where the answer puts them), over
-    the true object's size: a can turned about its axis is right by the second, not the first."""
+    """
+    Return how right an answer is against a bag's ground truth.
+
+    The rotation error (degrees; blind to symmetry) and the surface error as ADD-S counts it (the
+    true object's points where the truth puts them, to the nearest of the answer's object's points
+    where the answer puts them), over the true object's size: a can turned about its axis is right
+    by the second, not the first.
+    """
     from scipy.spatial import cKDTree
 
     from pcrp_core.geometry import rotation_angle_deg
@@ -48,8 +52,12 @@ def answer_quality(model, gallery_id: str, R, t, truth: dict) -> dict:
 
 # -- make-bag -------------------------------------------------------------------------------------
 def _camera_view(mesh, index: int, k: int, seed: int, upright: bool, rng):
-    """(points, R, t) of a mesh (metres) as a depth camera measures it: anywhere in front of it
-    turned every way (the evaluation's free scenes), or standing upright before a level camera."""
+    """
+    Return (points, R, t) of a mesh (metres) as a depth camera measures it.
+
+    Anywhere in front of it turned every way (the evaluation's free scenes), or standing upright
+    before a level camera.
+    """
     from scipy.spatial.transform import Rotation
     from pcrp_core.evaluation.scenes import sample_scene
     from pcrp_core.sources.camera import RangeNoise, view_of
@@ -59,7 +67,8 @@ def _camera_view(mesh, index: int, k: int, seed: int, upright: bool, rng):
         return scene.points.astype(np.float64), scene.R, scene.t
     R = LEVEL_CAMERA @ Rotation.from_euler('z', rng.uniform(0.0, 2 * np.pi)).as_matrix()
     centre = (mesh.vertices.min(0) + mesh.vertices.max(0)) / 2
-    t = np.array([rng.uniform(-0.1, 0.1), rng.uniform(-0.05, 0.05), rng.uniform(0.5, 0.8)]) - R @ centre
+    t = np.array([rng.uniform(-0.1, 0.1), rng.uniform(-0.05, 0.05),
+                  rng.uniform(0.5, 0.8)]) - R @ centre
     return view_of(mesh, R, t, noise=RangeNoise(), rng=rng), R, t
 
 
@@ -245,7 +254,8 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
                             c['timestamp'],
                         )
                     if gt and gt['gallery_id'] in model.gallery.index:
-                        row.update(answer_quality(model, r.gallery_id, r.rotation, r.translation, gt))
+                        row.update(answer_quality(model, r.gallery_id, r.rotation, r.translation,
+                                                  gt))
             if gt:
                 row.update(true_id=gt['gallery_id'], true_category=gt['category'])
             rows.append(row)
@@ -260,7 +270,8 @@ def format_row(row) -> str:
     conf = f"{row['confidence']:5.2f}" if 'confidence' in row else '    -'
     lat = f"{row['latency_ms']:7.0f}" if 'latency_ms' in row else '      -'
     return (f"{row['topic'][:18]:18s} {row['stamp']:>21s} {row.get('true_id', '-')[:14]:14s} "
-            f"{row.get('gallery_id', '-')[:14]:14s} {err} {surface} {conf} {lat}  {row.get('status', '')}")
+            f"{row.get('gallery_id', '-')[:14]:14s} {err} {surface} {conf} {lat}  "
+            f"{row.get('status', '')}")
 
 
 HEADER = (f"{'topic':18s} {'stamp':>21s} {'true id':14s} {'answer':14s} "
@@ -287,8 +298,9 @@ def summary(rows) -> str:
         category = np.mean([r['category'] == r['true_category'] for r in withgt])
         gallery_id = np.mean([r['gallery_id'] == r['true_id'] for r in withgt])
         lines.append(
-            f'accuracy on answered clouds ({len(withgt)}): right object {gallery_id:.0%}, category '
-            f'{category:.0%}, pose right (ADD-S under 10 % of the size) {np.mean(surface < 0.1):.0%}, '
+            f'accuracy on answered clouds ({len(withgt)}): right object {gallery_id:.0%}, '
+            f'category {category:.0%}, pose right (ADD-S under 10 % of the size) '
+            f'{np.mean(surface < 0.1):.0%}, '
             f'rotation error median {np.median(err):.1f} deg (blind to symmetry)')
     return '\n'.join(lines)
 
