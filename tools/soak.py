@@ -62,8 +62,9 @@ class _NodeProcesses:
     parameter.
     """
 
-    def __init__(self, topics, k: int, model_path, workers: int = 1):
+    def __init__(self, topics, k: int, model_path, workers: int = 1, reliable: bool = False):
         self.workers = workers
+        self.reliable = reliable
         self.dir = Path(tempfile.mkdtemp(prefix='pcrp_soak_'))
         self.names = [NODE_NAME if k == 1 else f'{NODE_NAME}_{i}' for i in range(k)]
         self.share = {name: topics[i::k] for i, name in enumerate(self.names)}
@@ -79,6 +80,9 @@ class _NodeProcesses:
         ]
         if model_path:
             lines.append(f"    model_path: '{model_path}'")
+        if self.reliable:
+            # the node's accounting alone: nothing lost on the way, as a reliable replay gives
+            lines += ['    qos_reliability: reliable', '    qos_depth: 100']
         params.write_text('\n'.join(lines) + '\n')
         cmd = [
             sys.executable,
@@ -164,7 +168,7 @@ def camera_clouds(n: int) -> list[GoodCloud]:
 
 def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
         model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print,
-        workers: int = 1) -> dict:
+        workers: int = 1, reliable: bool = False) -> dict:
     from geometry_msgs.msg import PoseStamped
     from pcrp_core import PCRP
     from pcrp_ros.conversions import xyz_to_pointcloud2
@@ -181,7 +185,7 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
               for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))])
     bads = refused_on_arrival()
     topics = [f'pcrp_soak/object_{k}' for k in range(n_topics)]
-    nodes = _NodeProcesses(topics, processes, model_path, workers)
+    nodes = _NodeProcesses(topics, processes, model_path, workers, reliable)
 
     rclpy.init()
     client = rclpy.create_node('pcrp_soak_driver')
