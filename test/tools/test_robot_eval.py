@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The robot evaluation: rendered views, pose errors, occluders, seeds, `pcrp eval`, the YCB report.
+"""
+The robot evaluation: views, pose errors, occluders, seeds, `pcrp eval`, the YCB report.
 
 Meshes are Open3D primitives (in memory, or written to a temporary folder for the commands), so
 these run without the YCB data.
@@ -22,19 +23,19 @@ import subprocess
 import sys
 from types import SimpleNamespace
 
+from helpers import REPO
 import numpy as np
 import open3d as o3d
-import pytest
-from scipy.spatial.transform import Rotation
-
-from helpers import REPO
 from pcrp_core.evaluation import metrics
 from pcrp_core.evaluation.scenes import OCCLUDED_SHARE, sample_scene, sample_scenes
 from pcrp_core.sources.camera import Mesh, PinholeCamera, RangeNoise, render_depth, view_of
+import pytest
+from scipy.spatial.transform import Rotation
 
 
 def _mesh(o3d_mesh) -> Mesh:
-    return Mesh(np.asarray(o3d_mesh.vertices, dtype=np.float64), np.asarray(o3d_mesh.triangles, dtype=np.int64))
+    return Mesh(np.asarray(o3d_mesh.vertices, dtype=np.float64),
+                np.asarray(o3d_mesh.triangles, dtype=np.int64))
 
 
 def box(w=0.1, h=0.1, d=0.1) -> Mesh:
@@ -59,70 +60,77 @@ def test_a_box_facing_the_camera_is_measured_at_its_depth_with_its_pixel_count()
 
 
 def test_adds_is_zero_at_the_true_pose_and_known_for_a_known_offset():
-    R, t = Rotation.from_euler("xyz", [10, 20, 30], degrees=True).as_matrix(), np.array([0.1, 0.0, 0.6])
+    R = Rotation.from_euler('xyz', [10, 20, 30], degrees=True).as_matrix()
+    t = np.array([0.1, 0.0, 0.6])
     pts = metrics.model_points(box(0.1, 0.06, 0.04))
     assert metrics.add_s(R, t, R, t, pts) == 0.0 and metrics.add(R, t, R, t, pts) == 0.0
-    line = np.column_stack([np.arange(10.0), np.zeros(10), np.zeros(10)])   # points 1 apart along x
+    # points 1 apart along x
+    line = np.column_stack([np.arange(10.0), np.zeros(10), np.zeros(10)])
     eye = np.eye(3)
     # shifted 0.3 across the line: every point's nearest is its own twin, 0.3 away
     assert metrics.add(eye, [0, 0.3, 0], eye, np.zeros(3), line) == pytest.approx(0.3)
     assert metrics.add_s(eye, [0, 0.3, 0], eye, np.zeros(3), line) == pytest.approx(0.3)
-    # shifted 0.7 along it: the first point is 0.7 from its nearest, the other nine 0.3 from a neighbour
+    # shifted 0.7 along it: the first point is 0.7 from its nearest, the other nine 0.3 from a
+    # neighbour
     assert metrics.add(eye, [0.7, 0, 0], eye, np.zeros(3), line) == pytest.approx(0.7)
-    assert metrics.add_s(eye, [0.7, 0, 0], eye, np.zeros(3), line) == pytest.approx((0.7 + 9 * 0.3) / 10)
+    assert metrics.add_s(eye, [0.7, 0, 0], eye, np.zeros(3), line) == pytest.approx(
+        (0.7 + 9 * 0.3) / 10)
 
 
 def test_adds_does_not_count_a_turn_about_a_cylinders_axis():
     can = cylinder()
     pts, diameter = metrics.model_points(can), metrics.diameter(can)
-    R, t = Rotation.from_euler("zyx", [30, 50, -20], degrees=True).as_matrix(), np.array([0.0, 0.1, 0.7])
-    turned = R @ Rotation.from_euler("z", 90, degrees=True).as_matrix()    # about its own axis
+    R = Rotation.from_euler('zyx', [30, 50, -20], degrees=True).as_matrix()
+    t = np.array([0.0, 0.1, 0.7])
+    turned = R @ Rotation.from_euler('z', 90, degrees=True).as_matrix()    # about its own axis
     adds, add = metrics.add_s(turned, t, R, t, pts), metrics.add(turned, t, R, t, pts)
     # what is left is the spacing of the 1000 model points (about 5 mm here), not the turn
     assert adds < 0.025 * diameter and metrics.pose_right(adds, diameter)
     assert add > 0.2 * diameter
     # a real error still counts: tipped 30 degrees about another axis
-    tipped = R @ Rotation.from_euler("x", 30, degrees=True).as_matrix()
+    tipped = R @ Rotation.from_euler('x', 30, degrees=True).as_matrix()
     assert metrics.add_s(tipped, t, R, t, pts) > 0.05 * diameter
     assert metrics.rotation_error_deg(turned, R) == pytest.approx(90.0)
     assert metrics.adds_auc([0.0, 0.05, None]) == pytest.approx((1.0 + 0.5 + 0.0) / 3)
-    assert metrics.family("025_mug") == "kitchen" and metrics.family("065-c_cups") == "shape/task"
-    assert metrics.family("chairs/chair_1") == "all"
+    assert metrics.family('025_mug') == 'kitchen' and metrics.family('065-c_cups') == 'shape/task'
+    assert metrics.family('chairs/chair_1') == 'all'
 
 
 def test_the_occluder_hides_the_share_the_scene_reports():
     mesh = box(0.12, 0.08, 0.05)
     for view in range(4):
-        scene = sample_scene(mesh, "box", 0, view, "free", occlusion=True, seed=3)
+        scene = sample_scene(mesh, 'box', 0, view, 'free', occlusion=True, seed=3)
         _, owner = render_depth([mesh.moved(scene.R, scene.t)], PinholeCamera())
         alone = int((owner == 0).sum())
         assert OCCLUDED_SHARE[0] <= scene.occluded_share <= OCCLUDED_SHARE[1]
         assert 1.0 - len(scene.points) / alone == pytest.approx(scene.occluded_share, abs=1e-9)
-        assert len(scene.points) >= 150 and scene.scenario == "free_occluded"
+        assert len(scene.points) >= 150 and scene.scenario == 'free_occluded'
         # the same view unoccluded is the same pose, all pixels seen
-        plain = sample_scene(mesh, "box", 0, view, "free", occlusion=False, seed=3)
+        plain = sample_scene(mesh, 'box', 0, view, 'free', occlusion=False, seed=3)
         np.testing.assert_array_equal(plain.R, scene.R)
         assert len(plain.points) == alone and plain.occluded_share == 0.0
 
 
 def test_scenes_come_from_their_seeds_alone():
-    meshes = {"a": box(0.1, 0.05, 0.03), "b": cylinder()}
-    drawn = sample_scenes(meshes, 2, "table", occlusion=False, seed=7)
-    again = sample_scene(meshes["b"], "b", 1, 1, "table", seed=7)     # drawn alone, not after the others
+    meshes = {'a': box(0.1, 0.05, 0.03), 'b': cylinder()}
+    drawn = sample_scenes(meshes, 2, 'table', occlusion=False, seed=7)
+    # drawn alone, not after the others
+    again = sample_scene(meshes['b'], 'b', 1, 1, 'table', seed=7)
     np.testing.assert_array_equal(drawn[3].points, again.points)
     np.testing.assert_array_equal(drawn[3].R, again.R)
-    other = sample_scene(meshes["b"], "b", 1, 1, "table", seed=8)
+    other = sample_scene(meshes['b'], 'b', 1, 1, 'table', seed=8)
     assert not np.allclose(other.R, again.R)
     for s in drawn:
-        # standing upright: the mesh's z axis is the table's normal, which points up out of the image
+        # standing upright: the mesh's z axis is the table's normal, which points up out of the
+        # image
         np.testing.assert_allclose(s.R[:, 2], s.up, atol=1e-9)
         assert s.up[1] < 0 and 0.45 <= s.distance <= 0.9 and s.points.dtype == np.float32
         # the camera (the origin) is above the table (the object's lowest point) by at least the
         # nearest distance's share at the shallowest elevation
         heights = (meshes[s.object_id].vertices @ s.R.T + s.t) @ s.up
         assert -heights.min() >= 0.45 * np.sin(np.radians(25))
-    free = sample_scenes(meshes, 1, "free", seed=7)
-    assert all(s.up is None and s.kind == "free" for s in free)
+    free = sample_scenes(meshes, 1, 'free', seed=7)
+    assert all(s.up is None and s.kind == 'free' for s in free)
 
 
 def _write_meshes(folder, twins=False):
@@ -146,8 +154,11 @@ def _run(*args, module='pcrp_ros.cli'):
 
 @pytest.fixture(scope='module')
 def built(tmp_path_factory):
-    """Three meshes, two of them one box in two frames, and their model built once by the
-    report's own cache (so the report's quick run finds it there)."""
+    """
+    Three meshes, two of them one box in two frames, and their model, built once.
+
+    It is built through the report's own cache, so the report's quick run finds it there.
+    """
     from tools.robot_report import build_model
 
     root = tmp_path_factory.mktemp('robot')
