@@ -15,6 +15,7 @@ from pcrp_core.confidence import expected_calibration_error, reliability
 from pcrp_core.evaluation import metrics
 from pcrp_core.evaluation.run import cell, COLUMNS, jsonable, statistics, summarise
 from pcrp_core.evaluation.scenes import DISTANCE, ELEVATION_DEG, MIN_PIXELS, OCCLUDED_SHARE
+from pcrp_core.instance.calibration import CALIBRATION_SEED
 from pcrp_core.sources.camera import PinholeCamera, RangeNoise
 from tools.robot_report import SEEDS, VIEWS_PER_OBJECT
 
@@ -253,8 +254,9 @@ def _headline(res: dict, summaries: dict) -> str:
     header += [{'ransac': 'RANSAC retrieval: pose right', 'fgr': 'FGR retrieval: pose right',
                 'ransac_told': 'RANSAC told: pose right'}[m] for m in base]
     return (f'pcrp with its defaults (min_confidence {threshold}); unknown rejected: the share of '
-            "the held-out objects' views the model built without them rejects; Open3D's columns "
-            'are its pose right on the views it answered. Details and definitions below.\n\n'
+            "the held-out objects' views the model built without them rejects"
+            + ("; Open3D's columns are its pose right on the views it answered" if base else '')
+            + '. Details and definitions below.\n\n'
             + _table(header, rows))
 
 
@@ -654,11 +656,13 @@ def _views_and_methods(res: dict) -> list[str]:
         f'- Seeds: every view is drawn from its own generator seeded by (split seed, object '
         f'index, view index). Test views: seed {SEEDS["test"]} (ROBOT.md). Validation views: '
         f'seed {SEEDS["validation"]} (`--split validation`, ROBOT_validation.md). pcrp learns its '
-        f'confidence at build time on views of its own meshes drawn with seed 2000003 (never a '
+        f'confidence at build time on views of its own meshes drawn with seed {CALIBRATION_SEED} '
+        f'(never a '
         f"report's). **The test views were never used to choose anything**: pcrp runs with its "
-        f'defaults (min_confidence among them, chosen by its authors on validation views: the '
-        f"threshold sweep is in ROBOT_validation.md), the Open3D settings are the tutorial's or "
-        f'were chosen on validation views (below), and the held-out objects were drawn by a '
+        f"defaults (min_confidence {_min_confidence(res)} is the package's default; the sweep "
+        f'a default is to be chosen on is on validation views, in ROBOT_validation.md), the '
+        f"Open3D settings are the tutorial's or were chosen on validation views (below), and "
+        f'the held-out objects were drawn with a '
         f'fixed seed before any view was answered.',
         '',
         '## The methods',
