@@ -37,10 +37,12 @@ eval: setup
 bench: setup
 	$(PY) -m tools bench --out docs/results
 
-# regenerates docs/results/ROBOT.md: pcrp and Open3D's pipelines on YCB depth-camera views (one view per object and
-# scenario, about 35 minutes on a shared 2-core machine; --views-per-object 2 doubles it)
+# regenerates docs/results/ROBOT_validation.md (pcrp only, with the min_confidence sweep: about 6
+# minutes) and ROBOT.md (pcrp and Open3D's pipelines on YCB depth-camera views: about an hour on a
+# shared 2-core machine, nearly all of it Open3D's; --baseline-views 1 halves that)
 robot: setup
-	$(PY) -m tools robot-report --data ../shared/data/ycb --out docs/results --views-per-object 1
+	$(PY) -m tools robot-report --data ../shared/data/ycb --out docs/results --split validation --no-baselines
+	$(PY) -m tools robot-report --data ../shared/data/ycb --out docs/results
 
 clean-venv:
 	rm -rf $(VENV)

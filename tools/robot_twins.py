@@ -82,8 +82,9 @@ def best_alignment(a: Shape, b: Shape) -> float:
 
 
 def find_twins(meshes: dict[str, Mesh], within: float = 0.002, also_nearest: int = 5):
-    """(twins, nearest, pairs_aligned): twins as (id_a, id_b, chamfer) within `within`; nearest:
-    the closest pairs that are not twins (for context), up to also_nearest of them."""
+    """(twins, nearest, pairs_aligned, scored): twins as (id_a, id_b, chamfer) within `within`;
+    nearest: the closest pairs that are not twins (for context), up to also_nearest of them;
+    scored: every pair aligned, nearest first."""
     shapes = {k: Shape(m) for k, m in meshes.items()}
     scored = []
     for (ka, a), (kb, b) in itertools.combinations(shapes.items(), 2):
@@ -91,4 +92,5 @@ def find_twins(meshes: dict[str, Mesh], within: float = 0.002, also_nearest: int
             continue
         scored.append((ka, kb, best_alignment(a, b)))
     scored.sort(key=lambda s: s[2])
-    return ([s for s in scored if s[2] < within], [s for s in scored if s[2] >= within][:also_nearest], len(scored))
+    return ([s for s in scored if s[2] < within],
+            [s for s in scored if s[2] >= within][:also_nearest], len(scored), scored)

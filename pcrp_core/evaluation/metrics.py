@@ -95,3 +95,41 @@ def family(object_id: str) -> str:
             if lo <= number <= hi:
                 return name
     return "all"
+
+
+def surface_error(R_est, t_est, answer_surface: np.ndarray, R, t, points: np.ndarray) -> float:
+    """Mean distance from the shown object's truly-posed points to the answer's posed surface.
+
+    For the object itself with its own points this is ADD-S. For another object (a twin of the
+    one shown) it says whether the robot would find the surface where it was told to: frames of
+    two objects differ, so their poses cannot be compared, but the surfaces they put can.
+    answer_surface should be dense (a few thousand points) so that its spacing adds little.
+    """
+    tree = cKDTree(_posed(answer_surface, R_est, t_est))
+    return float(tree.query(_posed(points, R, t))[0].mean())
+
+
+def roc_auc(positive, negative) -> float:
+    """Chance that a positive's score beats a negative's (ties count half): 0.5 is no signal.
+
+    This is the area under the ROC curve, computed from ranks so that thousands of scores cost
+    no more than sorting them; nan when either side is empty.
+    """
+    a = np.asarray(positive, dtype=np.float64)
+    b = np.asarray(negative, dtype=np.float64)
+    if a.size == 0 or b.size == 0:
+        return float('nan')
+    from scipy.stats import rankdata
+
+    ranks = rankdata(np.concatenate([a, b]))
+    return float((ranks[: a.size].sum() - a.size * (a.size + 1) / 2) / (a.size * b.size))
+
+
+def roc_curve(positive, negative) -> tuple[np.ndarray, np.ndarray]:
+    """(false positive rate, true positive rate) over every threshold, from (0, 0) to (1, 1)."""
+    a = np.asarray(positive, dtype=np.float64)
+    b = np.asarray(negative, dtype=np.float64)
+    thresholds = np.unique(np.concatenate([a, b, [np.inf]]))[::-1]
+    tpr = np.array([(a >= s).mean() if a.size else np.nan for s in thresholds])
+    fpr = np.array([(b >= s).mean() if b.size else np.nan for s in thresholds])
+    return np.concatenate([fpr, [1.0]]), np.concatenate([tpr, [1.0]])
