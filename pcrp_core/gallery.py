@@ -5,9 +5,11 @@ import numpy as np
 
 
 class Gallery:
-    def __init__(self, ids, categories, clouds, vectors: np.ndarray, owners: np.ndarray | None = None):
+    def __init__(self, ids, categories, clouds, vectors: np.ndarray, owners: np.ndarray | None = None,
+                 mirrors: np.ndarray | None = None):
         """vectors: one per object, then optionally more per object (descriptors of one-sided
-        views), owners[i] naming the object of vectors[i]."""
+        views), owners[i] naming the object of vectors[i]. mirrors: each object's mirror plane in
+        normalised units as registration/mirror.plane_row gives it, when worked out at build."""
         owners = np.arange(len(ids)) if owners is None else np.asarray(owners, dtype=np.int64)
         if not (len(ids) == len(categories) == len(clouds)) or len(owners) != len(vectors):
             raise ValueError("gallery ids, categories, clouds and vectors differ in length")
@@ -22,6 +24,9 @@ class Gallery:
         self.vectors = np.asarray(vectors, dtype=np.float32)
         self.index = {g: i for i, g in enumerate(self.ids)}
         self._sq = (self.vectors ** 2).sum(1)
+        self.mirrors = None if mirrors is None else np.asarray(mirrors, dtype=np.float64).reshape(-1, 4)
+        if self.mirrors is not None and len(self.mirrors) != len(self.ids):
+            raise ValueError("gallery mirror planes differ in number from the objects")
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -45,9 +50,12 @@ class Gallery:
 
     def to_arrays(self) -> dict:
         lengths = np.array([len(c) for c in self.clouds], dtype=np.int64)
-        return {"gallery_vectors": self.vectors, "gallery_vector_owners": self.owners,
-                "gallery_points": np.concatenate(self.clouds) if self.clouds else np.zeros((0, 3), np.float32),
-                "gallery_lengths": lengths}
+        arrays = {"gallery_vectors": self.vectors, "gallery_vector_owners": self.owners,
+                  "gallery_points": np.concatenate(self.clouds) if self.clouds else np.zeros((0, 3), np.float32),
+                  "gallery_lengths": lengths}
+        if self.mirrors is not None:
+            arrays["gallery_mirrors"] = self.mirrors
+        return arrays
 
     @classmethod
     def from_arrays(cls, ids, categories, arrays: dict) -> "Gallery":
@@ -55,4 +63,6 @@ class Gallery:
         if len(ends) != len(ids) or (len(ends) and ends[-1] != len(arrays["gallery_points"])):
             raise ValueError("gallery clouds do not match the gallery IDs")
         clouds = np.split(arrays["gallery_points"], ends[:-1]) if len(ends) else []
-        return cls(ids, categories, clouds, arrays["gallery_vectors"], arrays["gallery_vector_owners"])
+        # models built before mirror planes were stored work them out as queries need them
+        return cls(ids, categories, clouds, arrays["gallery_vectors"], arrays["gallery_vector_owners"],
+                   arrays.get("gallery_mirrors"))

@@ -130,7 +130,7 @@ class PCRP:
         rows = np.isin(self.gallery.owners, keep)
         g = self.gallery
         gallery = Gallery([g.ids[i] for i in keep], [g.categories[i] for i in keep], [g.clouds[i] for i in keep],
-                          g.vectors[rows], remap[g.owners[rows]])
+                          g.vectors[rows], remap[g.owners[rows]], None if g.mirrors is None else g.mirrors[keep])
         templates = None if self.templates is None else self.templates.subset(keep)
         model = PCRP(self.pointhop, self.vlad, gallery, self.unit, self.meta, self.n_points, templates,
                      self.view_calibration)

@@ -30,6 +30,7 @@ def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | No
     stamp = path / "eval_recipe.json"
     if stamp.is_file() and json.loads(stamp.read_text()) == recipe:
         _record_up_axis(path)
+        _add_mirror_planes(path, n_jobs, log)
         return path, False
     objects = load_sources([str(Path(data) / f"{c}.npz") for c in categories], split=split, limit_per_category=limit)
     if holdout:
@@ -51,6 +52,18 @@ def _record_up_axis(path: Path) -> None:
     if "up_axis" not in meta:
         meta["up_axis"] = [0.0, 0.0, 1.0]
         meta_path.write_text(json.dumps(meta, indent=1))
+
+
+def _add_mirror_planes(path: Path, n_jobs: int | None, log=print) -> None:
+    """Models cached before builds stored the gallery's mirror planes get them now, as a build
+    works them out (the rest of the model does not depend on them)."""
+    model = PCRP.load(path)
+    if model.gallery.mirrors is not None:
+        return
+    from pcrp_core.build import mirror_planes
+    log(f"adding mirror planes to {path.name}")
+    model.gallery.mirrors = mirror_planes(model.gallery.clouds, model.unit, n_jobs)
+    model.save(path)
 
 
 def held_out(data: Path, category: str, n: int, split: str = "train") -> list[str]:
