@@ -45,8 +45,10 @@ def answer(model, pts: np.ndarray, viewpoint, up_pair, opts: QueryOptions, pose_
     registrar = Registrar(prepare(normed * ratio, sampled, feats), pose_opts, rng,
                           None if vp is None else vp * ratio, timings, up_pair)
     top = [int(i) for i in idx[: opts.n_candidates]]
-    matched = [model.prepared.get(i, True, opts.cache_size) for i in top[: opts.n_matched]]
-    verifiers = matched + [model.prepared.get(i, False, opts.cache_size) for i in top[opts.n_matched:]]
+    # a gallery object's point features cost as much as the query's: whole clouds do without them
+    n_matched = opts.n_matched if viewpoint is not None or pose_opts.whole_features else 0
+    matched = [model.prepared.get(i, True, opts.cache_size) for i in top[:n_matched]]
+    verifiers = matched + [model.prepared.get(i, False, opts.cache_size) for i in top[n_matched:]]
     j, h = registrar.best_pose(matched, verifiers, [model.gallery.categories[i] for i in top])
     i = top[j]
     timings['registration'] = time.perf_counter() - t3

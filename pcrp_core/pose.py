@@ -89,6 +89,12 @@ class Registrar:
         self.clock = Clock(timings)
         self.viewpoint = viewpoint
         self.up = None if up is None else tuple(np.asarray(u, dtype=np.float64) for u in up)
+        # whole clouds and one-sided views have settings of their own for the work spent on them
+        whole = viewpoint is None
+        self.seeders = opts.seeders if whole else opts.seeders_view
+        self.pool_size = opts.pool_size if whole else opts.pool_size_view
+        self.vote_iterations = opts.vote_icp_iterations if whole else opts.vote_icp_iterations_view
+        self.final_ratio = opts.final_ratio if whole else opts.final_ratio_view
         src = query.sampled if query.sampled is not None else query.points
         if len(src) > opts.icp_points:
             src = src[rng.choice(len(src), opts.icp_points, replace=False)]
@@ -184,10 +190,10 @@ class Registrar:
         """hyp fully refined on gallery. The vote already ran the first ICP iterations of that
         very run when it used the same points, so the run resumes where the vote stopped."""
         opts = self.opts
-        if opts.refine and self.coarse_src is self.src and 0 < opts.vote_icp_iterations <= opts.icp_iterations:
+        if opts.refine and self.coarse_src is self.src and 0 < self.vote_iterations <= opts.icp_iterations:
             if not vote.icp_moving:
                 return _resumed(vote, hyp.source)
-            return self.refine_many([vote.R], [vote.t], gallery, opts.icp_iterations - opts.vote_icp_iterations,
+            return self.refine_many([vote.R], [vote.t], gallery, opts.icp_iterations - self.vote_iterations,
                                     [hyp.source], coarse=False, prev=[vote.icp_prev])[0]
         return self.refine(hyp.R, hyp.t, gallery, opts.icp_iterations, hyp.source, coarse=False)
 
@@ -209,14 +215,14 @@ class Registrar:
         """
         self.clock.lap("gallery_features")   # what the caller spent preparing the candidates
         pool = []
-        n_seed = len(verifiers) if self.opts.seeders <= 0 else max(len(matched), self.opts.seeders)
+        n_seed = len(verifiers) if self.seeders <= 0 else max(len(matched), self.seeders)
         seeders = verifiers[:n_seed]
         for rank, g in enumerate(seeders):
             pool += _distinct(sorted(self.seeds(g, rank), key=lambda h: h.chamfer), 2)
         # a seeder with no upright hypothesis hands back all of its own: drop those if others have some
         pool = self._keep_upright(pool)
         # the best few distinct rotations go to the vote; the rest only cost time
-        pool = _distinct(sorted(pool, key=lambda h: h.chamfer), self.opts.pool_size)
+        pool = _distinct(sorted(pool, key=lambda h: h.chamfer), self.pool_size)
         if not self.opts.consensus or len(verifiers) == 1:
             best = min(pool, key=lambda h: h.chamfer)
             final = self.refine(best.R, best.t, verifiers[0], self.opts.icp_iterations, best.source, coarse=False)
@@ -225,7 +231,7 @@ class Registrar:
             return 0, final
         # chamfer of each hypothesis on each candidate, after a short refinement there
         Rs, ts = [h.R for h in pool], [h.t for h in pool]
-        votes = [self.refine_many(Rs, ts, g, self.opts.vote_icp_iterations, [""] * len(pool)) for g in verifiers]
+        votes = [self.refine_many(Rs, ts, g, self.vote_iterations, [""] * len(pool)) for g in verifiers]
         ch = np.array([[h.chamfer for h in row] for row in votes]).T
         voters = np.ones(len(verifiers), bool)
         if groups is not None:
@@ -242,15 +248,19 @@ class Registrar:
             k = int(np.argmin(ch.min(axis=1)))
         best = pool[k]
         self.clock.lap("verification")
-        refined = [self._final(best, g, row[k]) for g, row in zip(verifiers, votes)]
-        j = int(np.argmin([h.chamfer for h in refined]))
-        near = _agreeing(refined, refined[j], self.opts.average_within)
+        # only candidates that already sit nearly as well as the best go on to the full refinement
+        vote_ch = np.array([row[k].chamfer for row in votes])
+        finalists = np.flatnonzero(vote_ch <= self.final_ratio * vote_ch.min())
+        refined = [self._final(best, verifiers[n], votes[n][k]) for n in finalists]
+        jj = int(np.argmin([h.chamfer for h in refined]))
+        j = int(finalists[jj])
+        near = _agreeing(refined, refined[jj], self.opts.average_within)
         if self.viewpoint is None and self.opts.refine and self.opts.symmetric_iterations > 0:
-            poses = [self._symmetric(refined[n], verifiers[n]) for n in near]
+            poses = [self._symmetric(refined[n], verifiers[finalists[n]]) for n in near]
         else:
             poses = [(refined[n].R, refined[n].t) for n in near]
         # only the poses are averaged; the result is scored once, on the best candidate
-        final = self._finish(_average(poses, refined[j]), verifiers[j])
+        final = self._finish(_average(poses, refined[jj]), verifiers[j])
         self.clock.lap("refinement")
         return j, final
 
