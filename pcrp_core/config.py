@@ -113,7 +113,7 @@ class QueryOptions(Options):
 
 @dataclass(frozen=True)
 class PoseOptions(Options):
-    """How poses are found and chosen (pose.py, hypotheses.py): settings for experiments more than
+    """How poses are found and chosen (category/, hypotheses.py): settings for experiments more than
     for users; the paper's pipeline is PAPER_POSE below."""
     # the paper's hypotheses: feature matches within symmetry halves, Procrustes in RANSAC
     ransac_iterations: int = setting(500, "RANSAC draws per pairing of symmetry halves.", low=1, high=100_000)

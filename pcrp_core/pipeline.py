@@ -3,7 +3,7 @@
 A cloud is cleaned (preprocess.py), then answered one of two ways: view by view against camera
 templates when the gallery was built from meshes and the cloud comes from a camera at a known
 viewpoint, in metres (instance/answer.py), else by PCRP's retrieval and registration
-(category.py). Building is build.py; the file format model_io.py.
+(category/). Building is build.py; the file format model_io.py.
 """
 from __future__ import annotations
 
@@ -247,7 +247,7 @@ class PCRP:
         up: which way is up in the cloud's frame (against gravity), when the caller knows it;
         answers then keep the gallery's up axis (`up_axis`) on it. None: any orientation.
         """
-        from pcrp_core import category
+        from pcrp_core.category import answer as category
         from pcrp_core.instance import answer as views
 
         t0 = time.perf_counter()

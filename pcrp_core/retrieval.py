@@ -11,7 +11,7 @@ import numpy as np
 
 from pcrp_core.config import PoseOptions
 from pcrp_core.geometry import normalised
-from pcrp_core.pose import Prepared, prepare
+from pcrp_core.category.prepared import Prepared, prepare
 from pcrp_core.registration.mirror import plane_from_row
 from pcrp_core.timing import Clock
 

@@ -153,7 +153,8 @@ def test_the_paper_variant_tries_only_the_papers_hypotheses():
     hypothesis comes from RANSAC on feature matches."""
     from pcrp_core import PCRP
     from tools.paper_eval.methods import PAPER_OPTIONS, _prepared
-    from pcrp_core.pose import PoseOptions, Registrar
+    from pcrp_core.category import Registrar
+    from pcrp_core.config import PoseOptions
     from pcrp_core.sources.procedural import generate_object
     from pcrp_core.sources.views import partial_view
     model = PCRP.load(None)

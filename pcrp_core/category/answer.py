@@ -1,25 +1,35 @@
 """Answering by retrieval and registration: PCRP's pipeline, with this package's extensions.
 
 The cloud is described by FR-PointHop and VLAD, the nearest gallery objects are retrieved, and
-the pose stage (pose.py) registers it to them and lets them vote on the rotation. Works for any
+the Registrar (registrar.py) registers it to them and lets them vote on the rotation. Works for any
 gallery and any cloud (whole or one-sided, known size or not); galleries of meshes answer clouds
 from a camera view by view instead (instance/answer.py).
 """
+
 from __future__ import annotations
 
 import time
 
 import numpy as np
 
+from pcrp_core.category.prepared import prepare
+from pcrp_core.category.registrar import Registrar
 from pcrp_core.config import QueryOptions
 from pcrp_core.geometry import rms_radius
-from pcrp_core.pose import Registrar, prepare
 from pcrp_core.result import PoseResult
 from pcrp_core.retrieval import describe
 
 
-def answer(model, pts: np.ndarray, viewpoint, up_pair, opts: QueryOptions, pose_opts, timings: dict,
-           t0: float) -> PoseResult:
+def answer(
+    model,
+    pts: np.ndarray,
+    viewpoint,
+    up_pair,
+    opts: QueryOptions,
+    pose_opts,
+    timings: dict,
+    t0: float,
+) -> PoseResult:
     """The PoseResult of a cleaned cloud pts (see PCRP.estimate for the arguments).
 
     Units: every cloud is centred and divided by the model-wide unit. In metric mode the query
@@ -31,7 +41,11 @@ def answer(model, pts: np.ndarray, viewpoint, up_pair, opts: QueryOptions, pose_
         size = float(np.median(model.radii)) / max(rms_radius(pts), 1e-12)
     normed = (pts - centre) * (size / model.unit)
     t1 = time.perf_counter()
-    vp = None if viewpoint is None else (np.asarray(viewpoint, dtype=np.float64) - centre) / model.unit * size
+    vp = (
+        None
+        if viewpoint is None
+        else (np.asarray(viewpoint, dtype=np.float64) - centre) / model.unit * size
+    )
     sampled, feats, vec = describe(model.pointhop, model.vlad, normed, vp, timings)
     t2 = time.perf_counter()
     timings['features'] = t2 - t1
@@ -42,8 +56,14 @@ def answer(model, pts: np.ndarray, viewpoint, up_pair, opts: QueryOptions, pose_
     ratio = 1.0
     if opts.scale_mode == 'normalize':
         ratio = model.radii[idx[0]] / float(np.median(model.radii))
-    registrar = Registrar(prepare(normed * ratio, sampled, feats), pose_opts, rng,
-                          None if vp is None else vp * ratio, timings, up_pair)
+    registrar = Registrar(
+        prepare(normed * ratio, sampled, feats),
+        pose_opts,
+        rng,
+        None if vp is None else vp * ratio,
+        timings,
+        up_pair,
+    )
     top = [int(i) for i in idx[: opts.n_candidates]]
     # a gallery object's point features cost as much as the query's: whole clouds do without them
     n_matched = opts.n_matched if viewpoint is not None or pose_opts.whole_features else 0
@@ -65,10 +85,23 @@ def answer(model, pts: np.ndarray, viewpoint, up_pair, opts: QueryOptions, pose_
     rejected = confidence < opts.min_confidence
     timings['total'] = time.perf_counter() - t0
     return PoseResult(
-        gallery_id=model.gallery.ids[i], category=model.gallery.categories[i], rotation=R,
-        translation=t, scale=scale, score=score, fitness=h.fitness,
-        inlier_rmse=h.rmse * model.unit / k, chamfer=h.chamfer, rejected=rejected,
+        gallery_id=model.gallery.ids[i],
+        category=model.gallery.categories[i],
+        rotation=R,
+        translation=t,
+        scale=scale,
+        score=score,
+        fitness=h.fitness,
+        inlier_rmse=h.rmse * model.unit / k,
+        chamfer=h.chamfer,
+        rejected=rejected,
         confidence=confidence,
-        reason=f'confidence {confidence:.2f} below min_confidence {opts.min_confidence:.2f}' if rejected else '',
+        reason=(
+            f'confidence {confidence:.2f} below min_confidence {opts.min_confidence:.2f}'
+            if rejected
+            else ''
+        ),
         candidates=tuple((model.gallery.ids[j], float(d)) for j, d in zip(idx, dist)),
-        timings=timings, n_points=len(pts))
+        timings=timings,
+        n_points=len(pts),
+    )
