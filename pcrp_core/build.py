@@ -55,7 +55,8 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
     iterables (e.g. tqdm); n_jobs processes describe the objects (default: one per core; the
     result does not depend on it). up_axis: the objects' up axis in their own frame; by default
     the one their sources state when they all agree. When every object comes with its mesh (in
-    metres), camera templates are made and, with calibrate, the confidence of answers learnt.
+    metres), camera templates are made; with calibrate, the confidence of answers is learnt (both
+    paths: category/calibration.py, and instance/calibration.py for meshes).
     """
     from pcrp_core.pipeline import PCRP
 
@@ -100,4 +101,7 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
     if templates is not None and calibrate:
         from pcrp_core.instance.calibration import calibrate as calibrate_views
         model.view_calibration, model.meta['twins'] = calibrate_views(model, meshes, n_jobs, progress)
+    if calibrate:
+        from pcrp_core.category.calibration import calibrate as calibrate_category
+        model.category_calibration = calibrate_category(model, n_jobs, progress)
     return model

@@ -31,17 +31,21 @@ class Gallery:
     def __len__(self) -> int:
         return len(self.ids)
 
-    def search(self, vector: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    def search(self, vector: np.ndarray, k: int, exclude=None) -> tuple[np.ndarray, np.ndarray]:
         """Indices and Euclidean distances of the k nearest objects (by their nearest stored
-        vector), nearest first.
+        vector), nearest first; exclude: indices of objects not to return (as if the gallery
+        lacked them, which is how a confidence is calibrated).
 
         Brute force: a matrix-vector product over even 10,000 objects costs well under a
         millisecond-scale budget, and is exact.
         """
-        k = max(1, min(k, len(self)))
+        n = len(self) - (0 if exclude is None else len(set(exclude)))
+        k = max(1, min(k, n))
         d2 = np.maximum(self._sq - 2.0 * self.vectors @ vector + float(vector @ vector), 0.0)
         per_object = np.full(len(self), np.inf)
         np.minimum.at(per_object, self.owners, d2)
+        if exclude is not None:
+            per_object[list(exclude)] = np.inf
         idx = np.argpartition(per_object, k - 1)[:k]
         # exact distances for the few kept: the expanded form above cancels badly near zero
         dist = np.array([np.linalg.norm(self.vectors[self.owners == i] - vector, axis=1).min() for i in idx])
