@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 
+from pcrp_core.category import evidence
 from pcrp_core.category.prepared import prepare
 from pcrp_core.category.registrar import Registrar
 from pcrp_core.config import QueryOptions
@@ -29,8 +30,12 @@ def answer(
     pose_opts,
     timings: dict,
     t0: float,
+    evidence_out: dict | None = None,
+    exclude=None,
 ) -> PoseResult:
-    """The PoseResult of a cleaned cloud pts (see PCRP.estimate for the arguments).
+    """The PoseResult of a cleaned cloud pts (see PCRP.estimate for the arguments);
+    evidence_out, when given, gets the answer's named evidence (evidence.py); exclude: gallery
+    indices answered as if the gallery lacked them (calibration.py).
 
     Units: every cloud is centred and divided by the model-wide unit. In metric mode the query
     keeps its size (scale 1); in normalize mode it is resized to the gallery's typical size,
@@ -49,7 +54,7 @@ def answer(
     sampled, feats, vec = describe(model.pointhop, model.vlad, normed, vp, timings)
     t2 = time.perf_counter()
     timings['features'] = t2 - t1
-    idx, dist = model.gallery.search(vec, max(10, opts.n_candidates))
+    idx, dist = model.gallery.search(vec, max(10, opts.n_candidates), exclude)
     t3 = time.perf_counter()
     timings['retrieval'] = t3 - t2
     rng = np.random.default_rng(opts.seed)
@@ -80,8 +85,14 @@ def answer(
     scale = 1.0 / k
     t = centre - scale * (R @ (c_g + model.unit * h.t))
     score = h.fitness
-    # until a calibrated confidence exists, the fit score stands in for it
-    confidence = score
+    named = evidence.features(
+        registrar.evidence, h, registrar.averaged, float(dist[0]), viewpoint is None
+    )
+    if evidence_out is not None:
+        evidence_out.update(named)
+    calibration = getattr(model, 'category_calibration', None)
+    # a model built before this path was calibrated lets the fit score stand in for a confidence
+    confidence = score if calibration is None else calibration.probability(named)
     rejected = confidence < opts.min_confidence
     timings['total'] = time.perf_counter() - t0
     return PoseResult(

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pcrp_core.category import refinement
+from pcrp_core.category import evidence, refinement
 from pcrp_core.category.fitting import Fitter
 from pcrp_core.category.hypothesis import Hypothesis, distinct
 from pcrp_core.category.prepared import Prepared
@@ -60,6 +60,9 @@ class Registrar:
         self.up = UpPrior(up, opts.up_tolerance_deg)
         self.effort = Effort(opts, viewpoint is None)
         self.fitter = Fitter(query, opts, rng, viewpoint)
+        # what the last best_pose saw that says how far to trust its answer (evidence.py)
+        self.evidence = evidence.alone()
+        self.averaged = 1
 
     def upright(self, Rs) -> np.ndarray:
         return self.up.upright(Rs)
@@ -104,10 +107,12 @@ class Registrar:
             )
             final = refinement.finish(fitter, final, verifiers[0])
             self.clock.lap('refinement')
+            self.evidence, self.averaged = evidence.alone(), 1
             return 0, final
-        k, votes, _ = vote(
+        k, votes, ch = vote(
             fitter, pool, verifiers, effort.vote_iterations, groups, effort.exact_ratio
         )
+        self.evidence = evidence.from_vote(ch, groups, k, opts.consensus_weight)
         best = pool[k]
         self.clock.lap('verification')
         return self._refined(best, k, votes, verifiers)
@@ -129,6 +134,7 @@ class Registrar:
             poses = [(refined[n].R, refined[n].t) for n in near]
         # only the poses are averaged; the result is scored once, on the best candidate
         j = int(chosen[jj])
+        self.averaged = len(poses)
         final = refinement.finish(fitter, refinement.average(poses, refined[jj]), verifiers[j])
         self.clock.lap('refinement')
         return j, final
