@@ -31,6 +31,7 @@ def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | No
     if stamp.is_file() and json.loads(stamp.read_text()) == recipe:
         _record_up_axis(path)
         _add_mirror_planes(path, n_jobs, log)
+        _add_category_calibration(path, n_jobs, log)
         return path, False
     objects = load_sources([str(Path(data) / f"{c}.npz") for c in categories], split=split, limit_per_category=limit)
     if holdout:
@@ -63,6 +64,18 @@ def _add_mirror_planes(path: Path, n_jobs: int | None, log=print) -> None:
     from pcrp_core.build import mirror_planes
     log(f"adding mirror planes to {path.name}")
     model.gallery.mirrors = mirror_planes(model.gallery.clouds, model.unit, n_jobs)
+    model.save(path)
+
+
+def _add_category_calibration(path: Path, n_jobs: int | None, log=print) -> None:
+    """Models cached before builds calibrated the category-level path's confidence get it now,
+    as a build learns it (nothing else in them depends on it)."""
+    model = PCRP.load(path)
+    if model.category_calibration is not None:
+        return
+    from pcrp_core.category.calibration import calibrate
+    log(f"calibrating the confidence of {path.name}")
+    model.category_calibration = calibrate(model, n_jobs)
     model.save(path)
 
 

@@ -9,13 +9,14 @@ from pathlib import Path
 
 import numpy as np
 
-from tools.paper_eval import frames, pose_table, registration_table, retrieval_table
+from tools.paper_eval import confidence_table, frames, pose_table, registration_table, retrieval_table
 from tools.paper_eval.models import ensure_model, held_out, loaded
 from tools.paper_eval.protocol import (INSTANCE_NOISE, PAPER_CATEGORIES, VIEWS, load_split, make_query, queries,
                                            query_rng)
 from pcrp_core.parallel import parallel_map
 
-EXPERIMENTS = ("frames", "registration", "retrieval", "pose", "holdout", "partial", "instances", "large", "rejection")
+EXPERIMENTS = ("frames", "registration", "retrieval", "pose", "holdout", "partial", "instances", "large", "rejection",
+               "confidence")
 HOLDOUT = 100                      # train objects per category kept out of the held-out check's model
 HOLDOUT_METHODS = ("pcrp", "pcrp_up", "pcrp_paper", "ransac_icp")
 OUTSIDE_CATEGORIES = ("table", "bench", "lamp")
@@ -186,9 +187,24 @@ def run_rejection(s: Settings, model_path) -> dict:
     return {"min_score": model.options.min_confidence, **pose_table.rejection_summary(inside, outside)}
 
 
+def run_confidence(s: Settings, model_path) -> dict:
+    """The category-level confidence on test objects of the gallery's categories and of twelve it
+    lacks, whole and one-sided (confidence_table.py)."""
+    n_in, n_out = (3, 1) if s.quick else (min(s.per_category or 100, 25), min(s.per_category or 100, 10))
+    qs = []
+    for cut in (None, "view"):
+        qs += queries(s.data, PAPER_CATEGORIES, f"confidence-{cut or 'whole'}", s.seed, n_in, "uniform", cut)
+        qs += queries(s.data, confidence_table.OUTSIDE, f"confidence-{cut or 'whole'}", s.seed, n_out, "uniform", cut)
+    state = {"model": str(model_path), "inside": PAPER_CATEGORIES}
+    rows = s.map(confidence_table.answer_one, qs, state, "confidence")
+    threshold = loaded(model_path).options.min_confidence
+    return {"threshold": threshold, "summary": confidence_table.summarise(rows, threshold), "rows": rows}
+
+
 def run(s: Settings) -> dict:
     t0 = time.perf_counter()
-    missing = [c for c in PAPER_CATEGORIES + OUTSIDE_CATEGORIES if not (s.data / f"{c}.npz").is_file()]
+    missing = [c for c in PAPER_CATEGORIES + OUTSIDE_CATEGORIES + confidence_table.OUTSIDE
+               if not (s.data / f"{c}.npz").is_file()]
     if missing:
         raise FileNotFoundError(f"{s.data}: no ModelNet40 archives for {', '.join(missing)}")
     suffix = "_quick" if s.quick else ""
@@ -242,6 +258,8 @@ def run(s: Settings) -> dict:
         timed("large", run_large, s, model40)
     if "rejection" in s.experiments:
         timed("rejection", run_rejection, s, model4)
+    if "confidence" in s.experiments:
+        timed("confidence", run_confidence, s, model4)
     res["seconds"]["total"] = time.perf_counter() - t0
     return res
 
