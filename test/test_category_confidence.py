@@ -1,4 +1,5 @@
 """The category-level path's confidence: learnt at build, stored, and what it says."""
+
 import numpy as np
 import pytest
 
@@ -27,7 +28,9 @@ def test_the_build_learns_a_confidence_that_is_stored_and_answers_report(small_m
     points = modelnet('chair', 'test', 1)[0][0]
     R, t = random_pose(np.random.default_rng(3))
     r = model.estimate(points @ R.T + t)
-    assert 0.0 <= r.confidence <= 1.0 and r.rejected == (r.confidence < model.options.min_confidence)
+    assert 0.0 <= r.confidence <= 1.0 and r.rejected == (
+        r.confidence < model.options.min_confidence
+    )
     # without a calibration the fit score stands in, as before
     model.category_calibration = None
     assert model.estimate(points @ R.T + t).confidence == pytest.approx(r.score)
