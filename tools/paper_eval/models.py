@@ -18,11 +18,13 @@ _SUBSETS: dict[tuple, PCRP] = {}
 
 def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | None, progress=None,
                  n_jobs: int | None = None, log=print, split: str = "train", views: int = 0,
-                 holdout: int = 0) -> tuple[Path, bool]:
+                 holdout: int = 0, calibrate: bool = False) -> tuple[Path, bool]:
     """(path, whether it was built now) of the model of these categories' train (or test) splits,
     at most `limit` objects each, built with the package's defaults and seed 0 (and `views`
     one-sided views per object, as `pcrp build --views` makes for depth cameras), reused while
-    its recipe is unchanged. holdout: that many objects of each category (held_out()) are kept out."""
+    its recipe is unchanged. holdout: that many objects of each category (held_out()) are kept out.
+    calibrate: learn the category-level confidence, as a build does by default (only the model
+    whose confidence is reported needs it: it costs minutes per model)."""
     path = Path(cache) / name
     recipe = {"categories": list(categories), "limit": limit, "data": str(Path(data).resolve()), "split": split, "views": views}
     if holdout:     # only then: models cached before the held-out check keep their recipe
@@ -31,7 +33,8 @@ def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | No
     if stamp.is_file() and json.loads(stamp.read_text()) == recipe:
         _record_up_axis(path)
         _add_mirror_planes(path, n_jobs, log)
-        _add_category_calibration(path, n_jobs, log)
+        if calibrate:
+            _add_category_calibration(path, n_jobs, log)
         return path, False
     objects = load_sources([str(Path(data) / f"{c}.npz") for c in categories], split=split, limit_per_category=limit)
     if holdout:
@@ -39,7 +42,7 @@ def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | No
         objects = [o for o in objects if o.gallery_id not in kept_out]
     log(f"building {name}: {len(objects)} {split} objects of {len(categories)} categories, {views} views each")
     model = PCRP.build(objects, sources=[f"{c}.npz" for c in categories], views=views, progress=progress,
-                       n_jobs=n_jobs)
+                       n_jobs=n_jobs, calibrate=calibrate)
     model.save(path)
     stamp.write_text(json.dumps(recipe))
     return path, True

@@ -225,7 +225,9 @@ def run(s: Settings) -> dict:
         res["seconds"][f"build_{name.removesuffix(suffix)}"] = time.perf_counter() - t if fresh else None
         return path
 
-    model4 = built("model4" + suffix, PAPER_CATEGORIES, s.build_limit)
+    # only the four-category model's confidence is reported (rejection, confidence): the others
+    # are built without the calibration, their answers' confidence is their fit score
+    model4 = built("model4" + suffix, PAPER_CATEGORIES, s.build_limit, calibrate=True)
     res["model4"] = {"objects": len(loaded(model4).gallery), "path": str(model4)}
     if "frames" in s.experiments:
         timed("frames", run_frames, s)
