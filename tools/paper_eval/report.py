@@ -382,6 +382,9 @@ def write_report(s, res: dict) -> Path:
              "package's defaults (`pcrp build`, seed 0); queries: their test split. Rotation error: the geodesic "
              "angle between estimated and true rotation. Times are per query, one core each "
              "(queries run in parallel, one per core).", ""]
+    if res.get("carried"):
+        lines += ["Not rerun here, carried over from an earlier run of the same seed (`--keep`): "
+                  + "; ".join(f"{k} (run {d})" for k, d in res["carried"].items()) + ".", ""]
     b = bar(res)
     if b:
         lines += ["## The bar", "", *b]

@@ -266,6 +266,28 @@ def run(s: Settings) -> dict:
     return res
 
 
+def carry(res: dict, earlier: dict) -> dict:
+    """res with the experiments it did not run taken from an earlier run's results (same seed),
+    each named in res["carried"] with that run's date, so the report says which figures are whose."""
+    if earlier.get("seed") != res["seed"]:
+        raise ValueError(f"the earlier results are of seed {earlier.get('seed')}, this run's of {res['seed']}")
+    out = dict(res)
+    out["carried"] = {}
+    for key, value in earlier.items():
+        if key in ("seed", "quick", "per_category", "machine", "date", "command", "seconds", "carried", "model4"):
+            continue
+        if key not in out:
+            out[key] = value
+            out["carried"][key] = earlier["date"]
+        elif key == "pose":
+            for setting, rows in value.items():
+                if setting not in out["pose"]:
+                    out["pose"] = {**out["pose"], setting: rows}
+                    out["carried"][f"pose/{setting}"] = earlier["date"]
+    out["seconds"] = {**{k: v for k, v in earlier["seconds"].items() if k != "total"}, **res["seconds"]}
+    return out
+
+
 def write(s: Settings, res: dict) -> Path:
     from tools.paper_eval import report
     s.out.mkdir(parents=True, exist_ok=True)
