@@ -12,12 +12,13 @@ import time
 
 import numpy as np
 
+from pcrp_core.config import PoseOptions
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
 from pcrp_core.geometry import normalised, unit_axis
 from pcrp_core.instance.templates import TemplateSettings
 from pcrp_core.instance.templates import stack as stack_templates
-from pcrp_core.parallel import object_features, object_templates, parallel_map, view_vectors
+from pcrp_core.parallel import object_features, object_mirror, object_templates, parallel_map, view_vectors
 from pcrp_core.preprocess import downsample, finite_points
 from pcrp_core.visibility import sphere_directions
 from pcrp_core.vlad import VLAD
@@ -28,6 +29,17 @@ def common_up(objects) -> np.ndarray | None:
     mixed gallery has no one up axis to hold answers to)."""
     ups = {tuple(np.round(unit_axis(o.up), 6)) if getattr(o, 'up', None) is not None else None for o in objects}
     return np.array(ups.pop()) if len(ups) == 1 and None not in ups else None
+
+
+def mirror_planes(clouds, unit: float, n_jobs: int | None = None, progress=None) -> np.ndarray:
+    """(n, 4) the mirror plane of each gallery cloud (as stored) in normalised units, NaN where
+    none, with PoseOptions' default tolerances: worked out here once rather than by the first
+    query that retrieves each object (a whole object's pose is finished on that plane)."""
+    pose = PoseOptions()
+    rows = parallel_map(object_mirror, [normalised(c, unit) for c in clouds],
+                        {'tolerance': pose.mirror_tolerance, 'max_deg': pose.mirror_max_deg}, n_jobs, progress,
+                        'mirror planes')
+    return np.stack(rows) if rows else np.zeros((0, 4))
 
 
 def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregation: str = 'vlad',
@@ -43,7 +55,8 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
     iterables (e.g. tqdm); n_jobs processes describe the objects (default: one per core; the
     result does not depend on it). up_axis: the objects' up axis in their own frame; by default
     the one their sources state when they all agree. When every object comes with its mesh (in
-    metres), camera templates are made and, with calibrate, the confidence of answers learnt.
+    metres), camera templates are made; with calibrate, the confidence of answers is learnt (both
+    paths: category/calibration.py, and instance/calibration.py for meshes).
     """
     from pcrp_core.pipeline import PCRP
 
@@ -72,8 +85,9 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
         for i, vs in enumerate(per_object):
             vectors += vs
             owners += [i] * len(vs)
-    gallery = Gallery([o.gallery_id for o in objects], [o.category for o in objects],
-                      [c.astype(np.float32) for c in clouds], np.stack(vectors), np.array(owners))
+    stored = [c.astype(np.float32) for c in clouds]
+    gallery = Gallery([o.gallery_id for o in objects], [o.category for o in objects], stored, np.stack(vectors),
+                      np.array(owners), mirror_planes(stored, unit, n_jobs, progress))
     templates, settings = None, TemplateSettings(view_points=n_points)
     meshes = [getattr(o, 'mesh', None) for o in objects]
     if all(m is not None for m in meshes):
@@ -87,4 +101,7 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
     if templates is not None and calibrate:
         from pcrp_core.instance.calibration import calibrate as calibrate_views
         model.view_calibration, model.meta['twins'] = calibrate_views(model, meshes, n_jobs, progress)
+    if calibrate:
+        from pcrp_core.category.calibration import calibrate as calibrate_category
+        model.category_calibration = calibrate_category(model, n_jobs, progress)
     return model

@@ -89,8 +89,8 @@ class QueryOptions(Options):
     (and the node, as parameters) tunes."""
     n_candidates: int = setting(16, "Retrieved gallery objects registered and voted on per cloud (1: the paper).",
                                 low=1, high=50)
-    n_matched: int = setting(2, "Of those, the first ones whose point features seed RANSAC hypotheses.",
-                             low=1, high=50)
+    n_matched: int = setting(2, "Of those, the first ones whose point features seed RANSAC hypotheses (whole "
+                                "clouds: only with the pose setting whole_features).", low=1, high=50)
     min_confidence: float = setting(0.5, "Answers less confident than this are rejected (reason low_confidence); "
                                          "no pose is published for them.", low=0.0, high=1.0)
     min_points: int = setting(32, "Clouds with fewer finite points are rejected (reason too_few_points).",
@@ -113,7 +113,7 @@ class QueryOptions(Options):
 
 @dataclass(frozen=True)
 class PoseOptions(Options):
-    """How poses are found and chosen (pose.py, hypotheses.py): settings for experiments more than
+    """How poses are found and chosen (category/, hypotheses.py): settings for experiments more than
     for users; the paper's pipeline is PAPER_POSE below."""
     # the paper's hypotheses: feature matches within symmetry halves, Procrustes in RANSAC
     ransac_iterations: int = setting(500, "RANSAC draws per pairing of symmetry halves.", low=1, high=100_000)
@@ -132,16 +132,27 @@ class PoseOptions(Options):
                                       "clouds).", low=0.0, high=1.0)
     exact_ratio_view: float = setting(0.65, "The same for clouds from a sensor, stricter: a partial cloud can fit a "
                                             "wrong turn of one relative closely.", low=0.0, high=1.0)
-    seeders: int = setting(0, "Top candidates that seed hypotheses (0: all; at least those matched).", low=0)
-    pool_size: int = setting(6, "Distinct rotations that go to the vote.", low=1)
+    seeders: int = setting(8, "Whole clouds: top candidates that seed hypotheses (0: all; at least those matched).",
+                           low=0)
+    seeders_view: int = setting(0, "The same for clouds from a sensor.", low=0)
+    whole_features: bool = setting(False, "Whole clouds: also seed RANSAC hypotheses from the point features of the "
+                                          "n_matched first candidates (principal axes and half turns find the same "
+                                          "poses, without the gallery's features).")
+    pool_size: int = setting(4, "Whole clouds: distinct rotations that go to the vote.", low=1)
+    pool_size_view: int = setting(6, "The same for clouds from a sensor.", low=1)
     reverse_weight: float = setting(0.5, "Whole clouds: weight of the gallery points far from the posed query (what "
                                          "is missing is evidence).", low=0.0)
     reverse_trim: float = setting(1.0, "Share of those gallery points counted.", low=0.0, high=1.0, low_open=True)
     visibility_weight: float = setting(1.0, "Sensor clouds: weight of the gallery points the sensor would see but "
                                             "the query lacks.", low=0.0)
     coarse_icp_iterations: int = setting(6, "ICP iterations per hypothesis before hypotheses are compared.", low=0)
-    vote_icp_iterations: int = setting(6, "ICP iterations per hypothesis and candidate before the vote.", low=0)
+    vote_icp_iterations: int = setting(1, "Whole clouds: ICP iterations per hypothesis and candidate before the "
+                                          "vote.", low=0)
+    vote_icp_iterations_view: int = setting(6, "The same for clouds from a sensor.", low=0)
     icp_tolerance: float = setting(1e-6, "ICP stops once the trimmed mean squared error gains less.", low=0.0)
+    final_ratio: float = setting(1.3, "Whole clouds: candidates whose fit in the vote is within this factor of the "
+                                      "best are fully refined (the others do not end near the best).", low=1.0)
+    final_ratio_view: float = setting(float("inf"), "The same for clouds from a sensor.", low=1.0)
     average_within: float = setting(1.15, "Candidates fitting within this factor of the best are averaged.", low=1.0)
     symmetric_iterations: int = setting(20, "Whole clouds: iterations of the final ICP with matches both ways.", low=0)
     symmetric_reverse_trim: float = setting(0.9, "Share of gallery-side matches kept there.", low=0.0, high=1.0,
@@ -194,7 +205,7 @@ USER_POSE_SETTINGS = ("refine", "up_tolerance_deg")
 # the best-fitting of those hypotheses; one retrieved object, no principal-axis, half-turn or
 # view hypotheses, no candidate vote, no ICP, no rejection.
 PAPER_POSE = PoseOptions(pca_hypotheses=False, flips=False, view_seeders=0, refine=False, consensus=False,
-                         seeders=1, reverse_weight=0.0)
+                         seeders=1, seeders_view=1, whole_features=True, reverse_weight=0.0)
 PAPER_QUERY = {"n_candidates": 1, "n_matched": 1, "min_confidence": 0.0}
 
 

@@ -5,9 +5,11 @@ import numpy as np
 
 
 class Gallery:
-    def __init__(self, ids, categories, clouds, vectors: np.ndarray, owners: np.ndarray | None = None):
+    def __init__(self, ids, categories, clouds, vectors: np.ndarray, owners: np.ndarray | None = None,
+                 mirrors: np.ndarray | None = None):
         """vectors: one per object, then optionally more per object (descriptors of one-sided
-        views), owners[i] naming the object of vectors[i]."""
+        views), owners[i] naming the object of vectors[i]. mirrors: each object's mirror plane in
+        normalised units as registration/mirror.plane_row gives it, when worked out at build."""
         owners = np.arange(len(ids)) if owners is None else np.asarray(owners, dtype=np.int64)
         if not (len(ids) == len(categories) == len(clouds)) or len(owners) != len(vectors):
             raise ValueError("gallery ids, categories, clouds and vectors differ in length")
@@ -22,21 +24,28 @@ class Gallery:
         self.vectors = np.asarray(vectors, dtype=np.float32)
         self.index = {g: i for i, g in enumerate(self.ids)}
         self._sq = (self.vectors ** 2).sum(1)
+        self.mirrors = None if mirrors is None else np.asarray(mirrors, dtype=np.float64).reshape(-1, 4)
+        if self.mirrors is not None and len(self.mirrors) != len(self.ids):
+            raise ValueError("gallery mirror planes differ in number from the objects")
 
     def __len__(self) -> int:
         return len(self.ids)
 
-    def search(self, vector: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    def search(self, vector: np.ndarray, k: int, exclude=None) -> tuple[np.ndarray, np.ndarray]:
         """Indices and Euclidean distances of the k nearest objects (by their nearest stored
-        vector), nearest first.
+        vector), nearest first; exclude: indices of objects not to return (as if the gallery
+        lacked them, which is how a confidence is calibrated).
 
         Brute force: a matrix-vector product over even 10,000 objects costs well under a
         millisecond-scale budget, and is exact.
         """
-        k = max(1, min(k, len(self)))
+        n = len(self) - (0 if exclude is None else len(set(exclude)))
+        k = max(1, min(k, n))
         d2 = np.maximum(self._sq - 2.0 * self.vectors @ vector + float(vector @ vector), 0.0)
         per_object = np.full(len(self), np.inf)
         np.minimum.at(per_object, self.owners, d2)
+        if exclude is not None:
+            per_object[list(exclude)] = np.inf
         idx = np.argpartition(per_object, k - 1)[:k]
         # exact distances for the few kept: the expanded form above cancels badly near zero
         dist = np.array([np.linalg.norm(self.vectors[self.owners == i] - vector, axis=1).min() for i in idx])
@@ -45,9 +54,12 @@ class Gallery:
 
     def to_arrays(self) -> dict:
         lengths = np.array([len(c) for c in self.clouds], dtype=np.int64)
-        return {"gallery_vectors": self.vectors, "gallery_vector_owners": self.owners,
-                "gallery_points": np.concatenate(self.clouds) if self.clouds else np.zeros((0, 3), np.float32),
-                "gallery_lengths": lengths}
+        arrays = {"gallery_vectors": self.vectors, "gallery_vector_owners": self.owners,
+                  "gallery_points": np.concatenate(self.clouds) if self.clouds else np.zeros((0, 3), np.float32),
+                  "gallery_lengths": lengths}
+        if self.mirrors is not None:
+            arrays["gallery_mirrors"] = self.mirrors
+        return arrays
 
     @classmethod
     def from_arrays(cls, ids, categories, arrays: dict) -> "Gallery":
@@ -55,4 +67,6 @@ class Gallery:
         if len(ends) != len(ids) or (len(ends) and ends[-1] != len(arrays["gallery_points"])):
             raise ValueError("gallery clouds do not match the gallery IDs")
         clouds = np.split(arrays["gallery_points"], ends[:-1]) if len(ends) else []
-        return cls(ids, categories, clouds, arrays["gallery_vectors"], arrays["gallery_vector_owners"])
+        # models built before mirror planes were stored work them out as queries need them
+        return cls(ids, categories, clouds, arrays["gallery_vectors"], arrays["gallery_vector_owners"],
+                   arrays.get("gallery_mirrors"))

@@ -41,6 +41,14 @@ def object_features(state: dict, cloud: np.ndarray) -> np.ndarray:
     return state["pointhop"].transform(cloud)[1]
 
 
+def object_mirror(state: dict, cloud: np.ndarray) -> np.ndarray:
+    """The mirror plane of one normalised gallery cloud as 4 numbers (registration/mirror.py)."""
+    from scipy.spatial import cKDTree
+
+    from pcrp_core.registration.mirror import gallery_mirror, plane_row
+    return plane_row(gallery_mirror(cloud, cKDTree(cloud), state["tolerance"], state["max_deg"]))
+
+
 def view_vectors(state: dict, cloud_and_cameras) -> list[np.ndarray]:
     """VLAD vectors of what a sensor at each camera position sees of the cloud."""
     from pcrp_core.visibility import visible_from

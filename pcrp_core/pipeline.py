@@ -3,7 +3,7 @@
 A cloud is cleaned (preprocess.py), then answered one of two ways: view by view against camera
 templates when the gallery was built from meshes and the cloud comes from a camera at a known
 viewpoint, in metres (instance/answer.py), else by PCRP's retrieval and registration
-(category.py). Building is build.py; the file format model_io.py.
+(category/). Building is build.py; the file format model_io.py.
 """
 from __future__ import annotations
 
@@ -29,6 +29,7 @@ from pcrp_core.vlad import VLAD
 
 DEFAULT_MODEL = Path(__file__).parent / 'data' / 'default_model'
 VIEW_CALIBRATION = 'confidence_views_'
+CATEGORY_CALIBRATION = 'confidence_category_'
 
 
 def default_model_path() -> Path:
@@ -47,9 +48,11 @@ class PCRP:
 
     def __init__(self, pointhop: PointHop, vlad: VLAD, gallery: Gallery, unit: float, meta: dict | None = None,
                  n_points: int = 1024, templates: Templates | None = None,
-                 view_calibration: Calibration | None = None):
+                 view_calibration: Calibration | None = None, category_calibration: Calibration | None = None):
         self.pointhop, self.vlad, self.gallery = pointhop, vlad, gallery
         self.templates, self.view_calibration = templates, view_calibration
+        # the confidence of answers by retrieval and registration (category/calibration.py)
+        self.category_calibration = category_calibration
         self.unit = float(unit)
         self.meta = dict(meta or {})
         self.n_points = int(n_points)
@@ -130,10 +133,10 @@ class PCRP:
         rows = np.isin(self.gallery.owners, keep)
         g = self.gallery
         gallery = Gallery([g.ids[i] for i in keep], [g.categories[i] for i in keep], [g.clouds[i] for i in keep],
-                          g.vectors[rows], remap[g.owners[rows]])
+                          g.vectors[rows], remap[g.owners[rows]], None if g.mirrors is None else g.mirrors[keep])
         templates = None if self.templates is None else self.templates.subset(keep)
         model = PCRP(self.pointhop, self.vlad, gallery, self.unit, self.meta, self.n_points, templates,
-                     self.view_calibration)
+                     self.view_calibration, self.category_calibration)
         model.options, model.pose_options, model.instance_options = (self.options, self.pose_options,
                                                                      self.instance_options)
         return model
@@ -175,6 +178,8 @@ class PCRP:
             arrays.update(self.templates.to_arrays())
         if self.view_calibration is not None:
             arrays.update(self.view_calibration.to_arrays(VIEW_CALIBRATION))
+        if self.category_calibration is not None:
+            arrays.update(self.category_calibration.to_arrays(CATEGORY_CALIBRATION))
         if self.vlad.aggregation == 'vlad':
             arrays['vlad_codebook'] = self.vlad.codebook_
         meta = {**self.meta, 'unit': self.unit, 'n_points': self.n_points,
@@ -200,7 +205,8 @@ class PCRP:
             if templates is not None and len(templates) != len(gallery):
                 raise ValueError('camera templates do not match the gallery')
             model = cls(pointhop, vlad, gallery, meta['unit'], meta, meta['n_points'], templates,
-                        Calibration.from_arrays(arrays, VIEW_CALIBRATION))
+                        Calibration.from_arrays(arrays, VIEW_CALIBRATION),
+                        Calibration.from_arrays(arrays, CATEGORY_CALIBRATION))
         except (KeyError, TypeError, ValueError) as e:
             raise ModelError(f'{path}: model contents are incomplete or inconsistent ({type(e).__name__}: {e})') from None
         model.meta['path'] = str(path)
@@ -247,7 +253,7 @@ class PCRP:
         up: which way is up in the cloud's frame (against gravity), when the caller knows it;
         answers then keep the gallery's up axis (`up_axis`) on it. None: any orientation.
         """
-        from pcrp_core import category
+        from pcrp_core.category import answer as category
         from pcrp_core.instance import answer as views
 
         t0 = time.perf_counter()

@@ -9,8 +9,10 @@ from collections import OrderedDict
 
 import numpy as np
 
+from pcrp_core.config import PoseOptions
 from pcrp_core.geometry import normalised
-from pcrp_core.pose import Prepared, prepare
+from pcrp_core.category.prepared import Prepared, prepare
+from pcrp_core.registration.mirror import plane_from_row
 from pcrp_core.timing import Clock
 
 
@@ -39,6 +41,11 @@ class PreparedCache:
             return self._items[key]
         normed = normalised(self.gallery.clouds[i], self.unit)
         prep = prepare(normed, *self.pointhop.transform(normed)) if features else prepare(normed)
+        if self.gallery.mirrors is not None:
+            # worked out at build with the default settings: the key says which
+            defaults = PoseOptions()
+            prep.memo(('mirror', defaults.mirror_tolerance, defaults.mirror_max_deg),
+                      lambda: plane_from_row(self.gallery.mirrors[i]))
         self._items[key] = prep
         while len(self._items) > size:
             self._items.popitem(last=False)

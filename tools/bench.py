@@ -305,7 +305,8 @@ def bench_node(model_path: str | None, topic_counts, duration: float, rate: floa
 
 # -- the report -------------------------------------------------------------------------------------------
 TARGETS = [
-    ("one query, end to end, single-threaded, median", "at most 100 ms, and no slower than Open3D FPFH + FGR + ICP"),
+    ("one query, end to end, single-threaded", "median at most 100 ms and p95 at most 200 ms, and a median no slower "
+     "than Open3D FPFH + RANSAC + ICP registering to the same gallery object"),
     ("building the four-category model", "under 3 minutes; under 10 MB plus the gallery clouds"),
     ("node, one topic at 10 Hz", "95th percentile age at publication at most 250 ms; memory flat within 10 %"),
     ("one camera view of a known object (YCB), single-threaded",
@@ -390,7 +391,7 @@ def why_unmet(res: dict) -> list[str]:
     st = single[0]["stages"] if single else {}
     reg, tot = st.get("registration", {}).get("median_ms", 0), st.get("total", {}).get("median_ms", 0)
     if single and not v.get(TARGETS[0][0], (None, True))[1]:
-        out.append(f"**Why a query takes longer than 100 ms.** {reg:.0f} of its {tot:.0f} ms are registration: "
+        out.append(f"**Why a query misses its target.** {reg:.0f} of its {tot:.0f} ms are registration: "
                    "hypotheses from each of the retrieved candidates (RANSAC on feature matches, principal axes, half "
                    "turns, each with a short ICP) and the vote that scores every hypothesis on every candidate."
                    + _what_time_buys(single[0]["methods"]))
@@ -425,10 +426,11 @@ def verdicts(res: dict) -> dict:
     single = [q for q in res.get("queries", []) if q["threads"] == "1" and q["n_points"] == 1024]
     if single:
         q = single[0]["methods"]
-        ours, fgr = q["pcrp"], q.get("fpfh_fgr_icp")
-        ok = ours["median_ms"] <= 100 and (fgr is None or ours["median_ms"] <= fgr["median_ms"])
-        v[TARGETS[0][0]] = (f"{ours['median_ms']:.0f} ms (FGR + ICP {fgr['median_ms']:.0f} ms)" if fgr
-                            else f"{ours['median_ms']:.0f} ms", ok)
+        ours, rivals = q["pcrp"], q.get("fpfh_ransac_icp")
+        ok = ours["median_ms"] <= 100 and ours["p95_ms"] <= 200 and (rivals is None or
+                                                                     ours["median_ms"] <= rivals["median_ms"])
+        v[TARGETS[0][0]] = (f"{_fmt_ms(ours)} ms median / p95"
+                            + (f" (RANSAC + ICP {_fmt_ms(rivals)} ms)" if rivals else ""), ok)
     if res.get("build"):
         b = res["build"]
         v[TARGETS[1][0]] = (f"{b['seconds'] / 60:.1f} min, {b['bytes'] / 1e6:.1f} MB", b["seconds"] < 180)

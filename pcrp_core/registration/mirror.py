@@ -95,3 +95,19 @@ def snap(R: np.ndarray, t: np.ndarray, plane: MirrorPlane, target: MirrorPlane,
     R2, t2 = C @ R, C @ (t - c) + c
     on_plane = R2 @ (plane.offset * plane.normal) + t2
     return R2, t2 + (target.offset - on_plane @ target.normal) * target.normal
+
+
+def plane_row(plane: MirrorPlane | None) -> np.ndarray:
+    """(normal, offset) of a gallery object's plane as 4 numbers, NaN where it has none: what a
+    model stores so that no query waits for the plane of an object it retrieves."""
+    if plane is None:
+        return np.full(4, np.nan)
+    return np.append(plane.normal, plane.offset)
+
+
+def plane_from_row(row: np.ndarray) -> MirrorPlane | None:
+    """The stored plane of plane_row(); its residual and rms are not kept (no use reads them)."""
+    row = np.asarray(row, dtype=np.float64)
+    if not np.isfinite(row).all():
+        return None
+    return MirrorPlane(row[:3] / np.linalg.norm(row[:3]), float(row[3]), np.nan, np.nan)

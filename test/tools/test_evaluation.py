@@ -153,7 +153,8 @@ def test_the_paper_variant_tries_only_the_papers_hypotheses():
     hypothesis comes from RANSAC on feature matches."""
     from pcrp_core import PCRP
     from tools.paper_eval.methods import PAPER_OPTIONS, _prepared
-    from pcrp_core.pose import PoseOptions, Registrar
+    from pcrp_core.category import Registrar
+    from pcrp_core.config import PoseOptions
     from pcrp_core.sources.procedural import generate_object
     from pcrp_core.sources.views import partial_view
     model = PCRP.load(None)
@@ -168,3 +169,16 @@ def test_the_paper_variant_tries_only_the_papers_hypotheses():
 
     assert sources(PAPER_OPTIONS) == {"ransac"}
     assert sources(PoseOptions()) >= {"ransac", "view", "pca"}
+
+
+def test_a_partial_run_carries_the_rest_of_an_earlier_one_and_says_so():
+    from tools.paper_eval.run import carry
+    earlier = {"seed": 0, "date": "then", "seconds": {"frames": 1.0, "total": 9.0}, "frames": {"a": 1},
+               "pose": {"uniform": "old", "view": "old view"}}
+    res = {"seed": 0, "date": "now", "seconds": {"pose": 2.0, "total": 2.0}, "pose": {"uniform": "new"}}
+    out = carry(res, earlier)
+    assert out["frames"] == {"a": 1} and out["pose"] == {"uniform": "new", "view": "old view"}
+    assert out["carried"] == {"frames": "then", "pose/view": "then"}
+    assert out["seconds"] == {"frames": 1.0, "pose": 2.0, "total": 2.0}
+    with pytest.raises(ValueError, match="seed"):
+        carry(res, {**earlier, "seed": 1})

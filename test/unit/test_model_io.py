@@ -15,3 +15,26 @@ def test_round_trip_keeps_every_array_and_answer(small_model, tmp_path):
     a, b = model.estimate(q), again.estimate(q)
     assert a.gallery_id == b.gallery_id
     np.testing.assert_allclose(a.transform, b.transform)
+
+
+def test_stored_mirror_planes_are_the_ones_a_query_would_find_and_old_models_still_answer(small_model, tmp_path):
+    from pcrp_core.registration.mirror import gallery_mirror
+
+    model = PCRP.load(small_model)
+    stored = model.gallery.mirrors
+    assert stored is not None and stored.shape == (len(model.gallery_ids), 4)
+    assert np.isfinite(stored).all(axis=1).sum() > len(stored) // 2      # most objects are mirror-symmetric
+    for i in range(6):
+        prep = model.prepared.get(i, False, 8)
+        plane = gallery_mirror(prep.points, prep.tree, model.pose_options.mirror_tolerance,
+                               model.pose_options.mirror_max_deg)
+        if plane is None:
+            assert not np.isfinite(stored[i]).any()
+        else:
+            np.testing.assert_allclose(stored[i], [*plane.normal, plane.offset], atol=1e-12)
+    # a model saved before planes were stored works them out as its queries need them, alike
+    model.gallery.mirrors = None
+    model.save(tmp_path / "old")
+    old, q = PCRP.load(tmp_path / "old"), model.gallery_cloud(model.gallery_ids[5])
+    assert old.gallery.mirrors is None
+    np.testing.assert_allclose(old.estimate(q).transform, PCRP.load(small_model).estimate(q).transform, atol=1e-9)

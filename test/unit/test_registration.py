@@ -4,7 +4,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from helpers import MODELNET, modelnet, random_pose, rotation_error_deg
-from pcrp_core.pose import _vote
+from pcrp_core.category.vote import choose
 from pcrp_core.registration import fit_quality, icp, icp_symmetric, procrustes, procrustes_batch, ransac
 from pcrp_core.registration.mirror import MirrorPlane, gallery_mirror, mirror_plane, snap
 from pcrp_core.symmetry import split_halves, symmetry_axis
@@ -151,9 +151,9 @@ def test_vote_is_not_swayed_by_how_far_a_relative_is_from_the_query():
         close = rng.uniform(0.08, 0.12, (6, 8))
         far = rng.uniform(0.20, 0.40, (6, 8))
         scaled = far * rng.uniform(0.7, 2.0, 8)       # still never a row's best fit
-        k = _vote(np.hstack([close, far]), voters, 0.5)
-        assert k == _vote(np.hstack([close, scaled]), voters, 0.5)
-        changed += k != _vote(np.hstack([close, far]), close_only, 0.5)
+        k = choose(np.hstack([close, far]), voters, 0.5)
+        assert k == choose(np.hstack([close, scaled]), voters, 0.5)
+        changed += k != choose(np.hstack([close, far]), close_only, 0.5)
     # not a vote that ignores its voters: leaving the far relatives out does change answers
     assert changed > 20
 

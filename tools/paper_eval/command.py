@@ -22,6 +22,8 @@ def register_eval(sub) -> None:
                    help=f"comma-separated subset of {','.join(EXPERIMENTS)} (default all)")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: one per core)")
     p.add_argument("--cache", default=None, help="where built models are kept (default ~/.cache/pcrp/eval)")
+    p.add_argument("--keep", default=None, help="an earlier results.json (same seed) whose experiments this run "
+                   "does not run are kept in the report, marked as carried over")
     p.set_defaults(func=_eval)
 
 
@@ -42,6 +44,11 @@ def _eval(args) -> int:
         res = run(settings)
     except FileNotFoundError as e:
         return _fail(str(e))
+    if args.keep:
+        import json
+        from pathlib import Path
+        from tools.paper_eval.run import carry
+        res = carry(res, json.loads(Path(args.keep).read_text()))
     path = write(settings, res)
     print(f"wrote {path} ({res['seconds']['total'] / 60:.1f} minutes)")
     return 0

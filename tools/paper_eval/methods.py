@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from pcrp_core.config import PAPER_POSE, PAPER_QUERY, PoseOptions
-from pcrp_core.pose import Registrar, prepare
+from pcrp_core.category import Registrar, prepare
 
 PAPER_OPTIONS = PAPER_POSE
 

@@ -18,11 +18,13 @@ _SUBSETS: dict[tuple, PCRP] = {}
 
 def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | None, progress=None,
                  n_jobs: int | None = None, log=print, split: str = "train", views: int = 0,
-                 holdout: int = 0) -> tuple[Path, bool]:
+                 holdout: int = 0, calibrate: bool = False) -> tuple[Path, bool]:
     """(path, whether it was built now) of the model of these categories' train (or test) splits,
     at most `limit` objects each, built with the package's defaults and seed 0 (and `views`
     one-sided views per object, as `pcrp build --views` makes for depth cameras), reused while
-    its recipe is unchanged. holdout: that many objects of each category (held_out()) are kept out."""
+    its recipe is unchanged. holdout: that many objects of each category (held_out()) are kept out.
+    calibrate: learn the category-level confidence, as a build does by default (only the model
+    whose confidence is reported needs it: it costs minutes per model)."""
     path = Path(cache) / name
     recipe = {"categories": list(categories), "limit": limit, "data": str(Path(data).resolve()), "split": split, "views": views}
     if holdout:     # only then: models cached before the held-out check keep their recipe
@@ -30,6 +32,9 @@ def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | No
     stamp = path / "eval_recipe.json"
     if stamp.is_file() and json.loads(stamp.read_text()) == recipe:
         _record_up_axis(path)
+        _add_mirror_planes(path, n_jobs, log)
+        if calibrate:
+            _add_category_calibration(path, n_jobs, log)
         return path, False
     objects = load_sources([str(Path(data) / f"{c}.npz") for c in categories], split=split, limit_per_category=limit)
     if holdout:
@@ -37,7 +42,7 @@ def ensure_model(cache: Path, name: str, data: Path, categories, limit: int | No
         objects = [o for o in objects if o.gallery_id not in kept_out]
     log(f"building {name}: {len(objects)} {split} objects of {len(categories)} categories, {views} views each")
     model = PCRP.build(objects, sources=[f"{c}.npz" for c in categories], views=views, progress=progress,
-                       n_jobs=n_jobs)
+                       n_jobs=n_jobs, calibrate=calibrate)
     model.save(path)
     stamp.write_text(json.dumps(recipe))
     return path, True
@@ -51,6 +56,30 @@ def _record_up_axis(path: Path) -> None:
     if "up_axis" not in meta:
         meta["up_axis"] = [0.0, 0.0, 1.0]
         meta_path.write_text(json.dumps(meta, indent=1))
+
+
+def _add_mirror_planes(path: Path, n_jobs: int | None, log=print) -> None:
+    """Models cached before builds stored the gallery's mirror planes get them now, as a build
+    works them out (the rest of the model does not depend on them)."""
+    model = PCRP.load(path)
+    if model.gallery.mirrors is not None:
+        return
+    from pcrp_core.build import mirror_planes
+    log(f"adding mirror planes to {path.name}")
+    model.gallery.mirrors = mirror_planes(model.gallery.clouds, model.unit, n_jobs)
+    model.save(path)
+
+
+def _add_category_calibration(path: Path, n_jobs: int | None, log=print) -> None:
+    """Models cached before builds calibrated the category-level path's confidence get it now,
+    as a build learns it (nothing else in them depends on it)."""
+    model = PCRP.load(path)
+    if model.category_calibration is not None:
+        return
+    from pcrp_core.category.calibration import calibrate
+    log(f"calibrating the confidence of {path.name}")
+    model.category_calibration = calibrate(model, n_jobs)
+    model.save(path)
 
 
 def held_out(data: Path, category: str, n: int, split: str = "train") -> list[str]:

@@ -7,7 +7,7 @@ import numpy as np
 from tools.paper_eval import open3d_pipelines as o3d_pipes
 from tools.paper_eval.methods import PAPER_OPTIONS, open3d_pose, register_pair, timed
 from tools.paper_eval.metrics import euler_errors, mse_rmse_mae
-from pcrp_core.pose import PoseOptions
+from pcrp_core.config import PoseOptions
 
 METHODS = {
     "r_pointhop": "R-PointHop (octant-coordinate hop 1), RANSAC on feature matches",

@@ -59,7 +59,7 @@ def _g(x):
 
 
 def _pct(x):
-    return "–" if x is None else f"{100 * x:.0f} %"
+    return "–" if x is None or x != x else f"{100 * x:.0f} %"
 
 
 def registration_md(reg: dict) -> list[str]:
@@ -267,6 +267,45 @@ def bar(res: dict) -> list[str]:
     return ["| bar | measured | met |", "|---|---|---|"] + out + [""]
 
 
+def confidence_md(conf: dict, out: Path) -> list[str]:
+    """The confidence section: the issue's targets per kind of cloud, a reliability table, plots."""
+    from tools.paper_eval import confidence_table as ct
+    sm, thr = conf["summary"], conf["threshold"]
+    L = ["## Confidence: when to act on an answer", "",
+         "Each answer's confidence is the probability, learnt when the model was built on its own train objects "
+         "(each queried as it is, with itself left out of the gallery, and with its whole category left out; "
+         "`pcrp_core/category/calibration.py`), that the answer is right: the right category and a rotation within "
+         f"{pcrp_right_deg():.0f}°. Queries: test objects of the gallery's four categories and of twelve it does not "
+         f"hold ({', '.join(ct.OUTSIDE)}; no choice was made on them), uniformly rotated, whole and one-sided; the "
+         "four-category gallery. Right answers are accepted when their confidence reaches the default "
+         f"`min_confidence` {thr}; an object from outside the gallery should be rejected.", "",
+         "| clouds | right answers (of the gallery's categories) | right answers accepted (target ≥ 95 %) "
+         "| outside objects rejected (target ≥ 80 %) | ROC AUC right vs outside (target ≥ 0.95) "
+         "| wrong answers of the gallery's categories rejected | calibration error (ECE) |",
+         "|---|---|---|---|---|---|---|"]
+    for kind, label in (("whole", "whole"), ("view", "one-sided"), ("all", "both")):
+        d = sm.get(kind)
+        if not d:
+            continue
+        met = lambda key: ("" if d.get(key) is None or d[key] != d[key]  # noqa: E731
+                           else (" (met)" if d[key] >= ct.TARGETS[key] else " (**missed**)"))
+        L.append(f"| {label} | {d['n_right']} of {d['n_inside']} | {_pct(d['right_accepted'])}{met('right_accepted')} "
+                 f"| {_pct(d['outside_rejected'])} of {d['n_outside']}{met('outside_rejected')} "
+                 f"| {d.get('auc', float('nan')):.3f}{met('auc')} | {_pct(d['wrong_inside_rejected'])} | {d['ece']:.3f} |")
+    rel = sm.get("all", {}).get("reliability", [])
+    L += ["", "Reliability over all these answers (a confidence that means what it says lies on the diagonal):", "",
+          "| mean confidence in bin | share right | answers |", "|---|---|---|",
+          *[f"| {c:.2f} | {r:.2f} | {n} |" for c, r, n in rel], ""]
+    if ct.plot(sm, out / "confidence.png"):
+        L += ["![Reliability diagram and ROC curves](confidence.png)", ""]
+    return L
+
+
+def pcrp_right_deg() -> float:
+    from pcrp_core.category.evidence import RIGHT_DEG
+    return RIGHT_DEG
+
+
 def cdf_plot(res: dict, path: Path) -> bool:
     uni = res.get("pose", {}).get("uniform")
     if not uni:
@@ -343,6 +382,9 @@ def write_report(s, res: dict) -> Path:
              "package's defaults (`pcrp build`, seed 0); queries: their test split. Rotation error: the geodesic "
              "angle between estimated and true rotation. Times are per query, one core each "
              "(queries run in parallel, one per core).", ""]
+    if res.get("carried"):
+        lines += ["Not rerun here, carried over from an earlier run of the same seed (`--keep`): "
+                  + "; ".join(f"{k} (run {d})" for k, d in res["carried"].items()) + ".", ""]
     b = bar(res)
     if b:
         lines += ["## The bar", "", *b]
@@ -427,7 +469,7 @@ def write_report(s, res: dict) -> Path:
     if "rejection" in res:
         rj = res["rejection"]
         lines += ["## Rejection: objects the gallery does not hold", "",
-                  f"The four-category gallery, default threshold (fit score below {rj['min_score']} is rejected). "
+                  f"The four-category gallery, default threshold (confidence below {rj['min_score']} is rejected). "
                   f"Queries of the four categories ({rj['inside_n']}) and of "
                   f"{', '.join(rj['outside'])} ({sum(v['n'] for v in rj['outside'].values())}), uniform rotations. "
                   f"An answer is right when its category is and its rotation error is under {pose_table.RIGHT_DEG:.0f}°.", "",
@@ -437,6 +479,8 @@ def write_report(s, res: dict) -> Path:
                   f"of all were right, {_pct(rj['inside_wrong_and_rejected'])} wrong) |",
                   f"| gallery categories: wrong but accepted | {_pct(rj['inside_wrong_but_accepted'])} |",
                   f"| gallery categories: right among accepted | {_pct(rj['inside_right_among_accepted'])} |", ""]
+    if "confidence" in res:
+        lines += confidence_md(res["confidence"], out)
     lines += ["## Reading these figures", "", *failure_bands(res), NOTES, ""]
     lines += ["## Run time", "", "| part | minutes |", "|---|---|",
               *[f"| {k} | {'cached from an earlier run' if v is None else f'{v / 60:.1f}'} |" for k, v in sec.items()], ""]

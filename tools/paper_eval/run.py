@@ -9,13 +9,14 @@ from pathlib import Path
 
 import numpy as np
 
-from tools.paper_eval import frames, pose_table, registration_table, retrieval_table
+from tools.paper_eval import confidence_table, frames, pose_table, registration_table, retrieval_table
 from tools.paper_eval.models import ensure_model, held_out, loaded
 from tools.paper_eval.protocol import (INSTANCE_NOISE, PAPER_CATEGORIES, VIEWS, load_split, make_query, queries,
                                            query_rng)
 from pcrp_core.parallel import parallel_map
 
-EXPERIMENTS = ("frames", "registration", "retrieval", "pose", "holdout", "partial", "instances", "large", "rejection")
+EXPERIMENTS = ("frames", "registration", "retrieval", "pose", "holdout", "partial", "instances", "large", "rejection",
+               "confidence")
 HOLDOUT = 100                      # train objects per category kept out of the held-out check's model
 HOLDOUT_METHODS = ("pcrp", "pcrp_up", "pcrp_paper", "ransac_icp")
 OUTSIDE_CATEGORIES = ("table", "bench", "lamp")
@@ -186,9 +187,24 @@ def run_rejection(s: Settings, model_path) -> dict:
     return {"min_score": model.options.min_confidence, **pose_table.rejection_summary(inside, outside)}
 
 
+def run_confidence(s: Settings, model_path) -> dict:
+    """The category-level confidence on test objects of the gallery's categories and of twelve it
+    lacks, whole and one-sided (confidence_table.py)."""
+    n_in, n_out = (3, 1) if s.quick else (min(s.per_category or 100, 25), min(s.per_category or 100, 10))
+    qs = []
+    for cut in (None, "view"):
+        qs += queries(s.data, PAPER_CATEGORIES, f"confidence-{cut or 'whole'}", s.seed, n_in, "uniform", cut)
+        qs += queries(s.data, confidence_table.OUTSIDE, f"confidence-{cut or 'whole'}", s.seed, n_out, "uniform", cut)
+    state = {"model": str(model_path), "inside": PAPER_CATEGORIES}
+    rows = s.map(confidence_table.answer_one, qs, state, "confidence")
+    threshold = loaded(model_path).options.min_confidence
+    return {"threshold": threshold, "summary": confidence_table.summarise(rows, threshold), "rows": rows}
+
+
 def run(s: Settings) -> dict:
     t0 = time.perf_counter()
-    missing = [c for c in PAPER_CATEGORIES + OUTSIDE_CATEGORIES if not (s.data / f"{c}.npz").is_file()]
+    missing = [c for c in PAPER_CATEGORIES + OUTSIDE_CATEGORIES + confidence_table.OUTSIDE
+               if not (s.data / f"{c}.npz").is_file()]
     if missing:
         raise FileNotFoundError(f"{s.data}: no ModelNet40 archives for {', '.join(missing)}")
     suffix = "_quick" if s.quick else ""
@@ -209,7 +225,9 @@ def run(s: Settings) -> dict:
         res["seconds"][f"build_{name.removesuffix(suffix)}"] = time.perf_counter() - t if fresh else None
         return path
 
-    model4 = built("model4" + suffix, PAPER_CATEGORIES, s.build_limit)
+    # only the four-category model's confidence is reported (rejection, confidence): the others
+    # are built without the calibration, their answers' confidence is their fit score
+    model4 = built("model4" + suffix, PAPER_CATEGORIES, s.build_limit, calibrate=True)
     res["model4"] = {"objects": len(loaded(model4).gallery), "path": str(model4)}
     if "frames" in s.experiments:
         timed("frames", run_frames, s)
@@ -242,8 +260,32 @@ def run(s: Settings) -> dict:
         timed("large", run_large, s, model40)
     if "rejection" in s.experiments:
         timed("rejection", run_rejection, s, model4)
+    if "confidence" in s.experiments:
+        timed("confidence", run_confidence, s, model4)
     res["seconds"]["total"] = time.perf_counter() - t0
     return res
+
+
+def carry(res: dict, earlier: dict) -> dict:
+    """res with the experiments it did not run taken from an earlier run's results (same seed),
+    each named in res["carried"] with that run's date, so the report says which figures are whose."""
+    if earlier.get("seed") != res["seed"]:
+        raise ValueError(f"the earlier results are of seed {earlier.get('seed')}, this run's of {res['seed']}")
+    out = dict(res)
+    out["carried"] = {}
+    for key, value in earlier.items():
+        if key in ("seed", "quick", "per_category", "machine", "date", "command", "seconds", "carried", "model4"):
+            continue
+        if key not in out:
+            out[key] = value
+            out["carried"][key] = earlier["date"]
+        elif key == "pose":
+            for setting, rows in value.items():
+                if setting not in out["pose"]:
+                    out["pose"] = {**out["pose"], setting: rows}
+                    out["carried"][f"pose/{setting}"] = earlier["date"]
+    out["seconds"] = {**{k: v for k, v in earlier["seconds"].items() if k != "total"}, **res["seconds"]}
+    return out
 
 
 def write(s: Settings, res: dict) -> Path:

@@ -1,0 +1,116 @@
+"""A confidence for the category-level path, learnt when the model is built on the gallery's own
+objects, with seeds of its own (CALIBRATION_SEED: never a benchmark's).
+
+A robot meets three kinds of object: one the gallery holds, an instance of a known category
+that the gallery does not hold (every category-level query is one), and an object of a
+category the gallery lacks. All are simulated with the gallery itself. A few objects of each
+category are queried, whole (with noise) and as one-sided views, under random rotations: as
+they are, with the object left out of the gallery, and with its whole category left out. An
+answer is right when its category is and its rotation is within evidence.RIGHT_DEG; with the
+category left out, none is. Logistic regression on the answers'
+evidence (evidence.FEATURES) gives the probability that an answer is right.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from pcrp_core.category.evidence import FEATURES, RIGHT_DEG
+
+CALIBRATION_SEED = 3_000_017
+PER_CATEGORY = 16  # objects of each category queried, at most
+TOTAL = 96  # objects queried in all, at most: a gallery of many categories gets fewer of each
+VIEW_NOISE = 0.005  # range noise of the one-sided views, in object radii
+WHOLE_NOISE = 0.01  # noise of the whole clouds, in object radii: an object measured again
+
+
+def rotation_error_deg(R_est: np.ndarray, R_true: np.ndarray) -> float:
+    c = (np.trace(R_est.T @ R_true) - 1.0) / 2.0
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+
+
+def calibration_queries(model, per_category: int = PER_CATEGORY, seed: int = CALIBRATION_SEED):
+    """(gallery index, points, viewpoint or None, true rotation) of each calibration query: up to
+    per_category objects of each category (an eighth of it at most, TOTAL in all), whole and
+    one-sided."""
+    from pcrp_core.sources.views import partial_view, random_rotation
+
+    rng = np.random.default_rng(seed)
+    cats = np.array(model.gallery.categories)
+    names = sorted(set(cats))
+    per_category = max(1, min(per_category, TOTAL // len(names)))
+    out = []
+    for c in names:
+        members = np.flatnonzero(cats == c)
+        n = min(per_category, max(1, len(members) // 8))
+        for i in np.sort(rng.choice(members, n, replace=False)):
+            cloud = model.gallery.clouds[i].astype(np.float64)
+            for view in (False, True):
+                radius = np.linalg.norm(cloud - cloud.mean(0), axis=1).max()
+                part, camera = (
+                    partial_view(cloud, rng, VIEW_NOISE, with_camera=True)
+                    if view
+                    else (cloud + rng.normal(scale=WHOLE_NOISE * radius, size=cloud.shape), None)
+                )
+                R, t = random_rotation(rng), rng.uniform(-0.5, 0.5, 3) * model.radii[i]
+                vp = None if camera is None else R @ camera + t
+                out.append((int(i), np.asarray(part, dtype=np.float64) @ R.T + t, vp, R))
+    return out
+
+
+def answer_without(model, points, viewpoint, drop, evidence_out: dict):
+    """model.estimate(points, viewpoint) by the category-level path as if the gallery lacked the
+    objects drop (indices), its evidence into evidence_out."""
+    from pcrp_core.category.answer import answer
+
+    t0 = time.perf_counter()
+    pts = model.prepare(points)
+    return answer(
+        model,
+        pts,
+        viewpoint,
+        None,
+        model.options,
+        model.pose_options,
+        {'preprocess': time.perf_counter() - t0},
+        t0,
+        evidence_out,
+        drop,
+    )
+
+
+def answer_query(state: dict, item) -> list[tuple[dict, bool]]:
+    """(evidence, right) of one calibration query answered as it is, with its object left out
+    and, when the gallery holds other categories, with its whole category left out."""
+    model = state['model']
+    index, points, viewpoint, R = item
+    category = model.gallery.categories[index]
+    same = [n for n, c in enumerate(model.gallery.categories) if c == category]
+    out = []
+    for drop, known in (([], True), ([index], True), (same, False)):
+        if len(drop) == len(model.gallery.ids):
+            continue
+        ev = {}
+        r = answer_without(model, points, viewpoint, drop, ev)
+        right = known and r.category == category and rotation_error_deg(r.rotation, R) < RIGHT_DEG
+        out.append((ev, bool(right)))
+    return out
+
+
+def calibrate(model, n_jobs=None, progress=None, per_category: int = PER_CATEGORY):
+    """The Calibration of the model's category-level answers, or None when its calibration
+    answers are all right or all wrong (nothing to learn from)."""
+    from pcrp_core.confidence import fit_calibration
+    from pcrp_core.parallel import parallel_map
+
+    queries = calibration_queries(model, per_category)
+    answered = parallel_map(
+        answer_query, queries, {'model': model}, n_jobs, progress, 'calibration', chunksize=4
+    )
+    samples = [s for rows in answered for s in rows]
+    X, y = [ev for ev, _ in samples], [right for _, right in samples]
+    if len(set(y)) < 2:
+        return None
+    return fit_calibration(X, y, FEATURES)

@@ -1,0 +1,140 @@
+"""Pose of a query relative to the retrieved gallery objects: hypotheses, the vote, refinement.
+
+Hypotheses (seeding.py) come from each of the first retrieved candidates; the best few distinct
+rotations go to the vote (vote.py), in which every retrieved candidate judges them; the chosen
+one is refined in full and averaged over the candidates that agree (refinement.py). When the
+caller knows which way is up, hypotheses that tip the gallery's up axis away from it are dropped
+before any of this (upright.py). All of it happens in normalised coordinates, query registered
+onto gallery: g ≈ R @ q + t.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pcrp_core.category import evidence, refinement
+from pcrp_core.category.fitting import Fitter
+from pcrp_core.category.hypothesis import Hypothesis, distinct
+from pcrp_core.category.prepared import Prepared
+from pcrp_core.category.seeding import seeds
+from pcrp_core.category.upright import UpPrior
+from pcrp_core.category.vote import vote
+from pcrp_core.config import PoseOptions
+from pcrp_core.timing import Clock
+
+SEEDS_PER_CANDIDATE = 2  # distinct rotations each seeding candidate hands to the pool
+
+
+class Effort:
+    """How much work a cloud gets at each stage: whole clouds and one-sided views have settings
+    of their own (a view's hypotheses are more often wrong, so it gets more of them)."""
+
+    def __init__(self, opts: PoseOptions, whole: bool):
+        self.seeders = opts.seeders if whole else opts.seeders_view
+        self.pool_size = opts.pool_size if whole else opts.pool_size_view
+        self.vote_iterations = opts.vote_icp_iterations if whole else opts.vote_icp_iterations_view
+        self.final_ratio = opts.final_ratio if whole else opts.final_ratio_view
+        self.exact_ratio = opts.exact_ratio if whole else opts.exact_ratio_view
+
+
+class Registrar:
+    """Registers one query (a Prepared cloud in normalised units) to retrieved gallery objects."""
+
+    def __init__(
+        self,
+        query: Prepared,
+        opts: PoseOptions,
+        rng: np.random.Generator,
+        viewpoint=None,
+        timings: dict | None = None,
+        up=None,
+    ):
+        """timings, when given, gets seconds added per stage: correspondences, ransac,
+        hypotheses (principal axes, flips, their coarse ICP), verification (the vote) and
+        refinement (final ICP, averaging, the mirror-plane finish). up: (the up direction in the
+        query's frame, the gallery's up axis), unit vectors, when the caller knows which way is up.
+        """
+        self.query, self.opts, self.rng = query, opts, rng
+        self.clock = Clock(timings)
+        self.viewpoint = viewpoint
+        self.up = UpPrior(up, opts.up_tolerance_deg)
+        self.effort = Effort(opts, viewpoint is None)
+        self.fitter = Fitter(query, opts, rng, viewpoint)
+        # what the last best_pose saw that says how far to trust its answer (evidence.py)
+        self.evidence = evidence.alone()
+        self.averaged = 1
+
+    def upright(self, Rs) -> np.ndarray:
+        return self.up.upright(Rs)
+
+    def seeds(self, gallery: Prepared, rank: int = 0) -> list[Hypothesis]:
+        """Coarsely refined hypotheses for one gallery object (seeding.seeds)."""
+        return seeds(self.fitter, gallery, rank, self.up, self.rng, self.clock)
+
+    def pool(self, matched: list[Prepared], verifiers: list[Prepared]) -> list[Hypothesis]:
+        """The distinct hypotheses that go to the vote, best first."""
+        n_seed = (
+            len(verifiers) if self.effort.seeders <= 0 else max(len(matched), self.effort.seeders)
+        )
+        pool = []
+        for rank, g in enumerate(verifiers[:n_seed]):
+            pool += distinct(
+                sorted(self.seeds(g, rank), key=lambda h: h.chamfer), SEEDS_PER_CANDIDATE
+            )
+        # a seeder with no upright hypothesis hands back all of its own: drop those if others
+        # have some
+        pool = self.up.keep(pool)
+        # the best few distinct rotations go to the vote; the rest only cost time
+        return distinct(sorted(pool, key=lambda h: h.chamfer), self.effort.pool_size)
+
+    def best_pose(
+        self, matched: list[Prepared], verifiers: list[Prepared], groups=None
+    ) -> tuple[int, Hypothesis]:
+        """(index into verifiers of the best-fitting object, its refined hypothesis).
+
+        matched: the first retrieved objects, with features, that seed hypotheses;
+        verifiers: all top retrieved objects (matched first) that vote on them;
+        groups: each verifier's category, when known: only those of the best-fitting object's
+        category vote (a chair has no say on which way an airplane faces).
+        """
+        opts, fitter, effort = self.opts, self.fitter, self.effort
+        self.clock.lap('gallery_features')  # what the caller spent preparing the candidates
+        pool = self.pool(matched, verifiers)
+        if not opts.consensus or len(verifiers) == 1:
+            best = min(pool, key=lambda h: h.chamfer)
+            final = fitter.refine(
+                best.R, best.t, verifiers[0], opts.icp_iterations, best.source, coarse=False
+            )
+            final = refinement.finish(fitter, final, verifiers[0])
+            self.clock.lap('refinement')
+            self.evidence, self.averaged = evidence.alone(), 1
+            return 0, final
+        k, votes, ch = vote(
+            fitter, pool, verifiers, effort.vote_iterations, groups, effort.exact_ratio
+        )
+        self.evidence = evidence.from_vote(ch, groups, k, opts.consensus_weight)
+        best = pool[k]
+        self.clock.lap('verification')
+        return self._refined(best, k, votes, verifiers)
+
+    def _refined(self, best: Hypothesis, k: int, votes, verifiers) -> tuple[int, Hypothesis]:
+        opts, fitter = self.opts, self.fitter
+        chosen = refinement.finalists(
+            np.array([row[k].chamfer for row in votes]), self.effort.final_ratio
+        )
+        refined = [
+            refinement.resume(fitter, best, verifiers[n], votes[n][k], self.effort.vote_iterations)
+            for n in chosen
+        ]
+        jj = int(np.argmin([h.chamfer for h in refined]))
+        near = refinement.agreeing(refined, refined[jj], opts.average_within)
+        if self.viewpoint is None and opts.refine and opts.symmetric_iterations > 0:
+            poses = [refinement.both_ways(fitter, refined[n], verifiers[chosen[n]]) for n in near]
+        else:
+            poses = [(refined[n].R, refined[n].t) for n in near]
+        # only the poses are averaged; the result is scored once, on the best candidate
+        j = int(chosen[jj])
+        self.averaged = len(poses)
+        final = refinement.finish(fitter, refinement.average(poses, refined[jj]), verifiers[j])
+        self.clock.lap('refinement')
+        return j, final

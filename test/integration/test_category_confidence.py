@@ -1,0 +1,54 @@
+"""The category-level path's confidence: learnt at build, stored, and what it says."""
+
+import numpy as np
+import pytest
+
+from helpers import MODELNET, modelnet, random_pose
+from pcrp_core import PCRP
+from pcrp_core.category.evidence import FEATURES
+
+
+def test_search_leaves_out_the_objects_it_is_told_to(small_model):
+    model = PCRP.load(small_model)
+    vec = model.gallery.vectors[0]
+    idx, _ = model.gallery.search(vec, 10)
+    assert idx[0] == 0
+    drop = list(idx[:5])
+    again, _ = model.gallery.search(vec, 10, drop)
+    assert not set(drop) & set(again.tolist()) and len(again) == 10
+
+
+def test_the_build_learns_a_confidence_that_is_stored_and_answers_report(small_model, tmp_path):
+    model = PCRP.load(small_model)
+    cal = model.category_calibration
+    assert cal is not None and cal.names == FEATURES and np.isfinite(cal.coef).all()
+    model.save(tmp_path / 'again')
+    again = PCRP.load(tmp_path / 'again')
+    np.testing.assert_array_equal(again.category_calibration.coef, cal.coef)
+    points = modelnet('chair', 'test', 1)[0][0]
+    R, t = random_pose(np.random.default_rng(3))
+    r = model.estimate(points @ R.T + t)
+    assert 0.0 <= r.confidence <= 1.0 and r.rejected == (
+        r.confidence < model.options.min_confidence
+    )
+    # without a calibration the fit score stands in, as before
+    model.category_calibration = None
+    assert model.estimate(points @ R.T + t).confidence == pytest.approx(r.score)
+
+
+@pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
+def test_objects_of_categories_outside_the_gallery_are_less_trusted_than_its_own(small_model):
+    """The gallery holds chairs, sofas and airplanes: its own objects (as a robot that knows
+    them would see them) must come back more confident than lamps and bottles it never held."""
+    model = PCRP.load(small_model)
+    rng = np.random.default_rng(11)
+    own, outside = [], []
+    for gid in model.gallery_ids[::12]:
+        R, t = random_pose(rng)
+        p = model.gallery_cloud(gid).astype(np.float64)
+        own.append(model.estimate((p + rng.normal(scale=0.01, size=p.shape)) @ R.T + t).confidence)
+    for category in ('lamp', 'bottle'):
+        for p in modelnet(category, 'test', 5)[0]:
+            R, t = random_pose(rng)
+            outside.append(model.estimate(p @ R.T + t).confidence)
+    assert np.median(own) > 0.5 > np.median(outside)

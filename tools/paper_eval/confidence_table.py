@@ -1,0 +1,131 @@
+"""How far the category-level path's confidence can be trusted: the share of right answers it
+accepts at the default min_confidence, the share of objects from categories the gallery lacks it
+rejects, and how well it ranks the two (ROC), whole clouds and one-sided views apart.
+
+The gallery is the four-category model; its confidence was learnt at build on its own train
+objects (category/calibration.py). The queries are test objects: of its categories, and of
+twelve categories it does not hold and no choice was made on (OUTSIDE).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pcrp_core.category.evidence import RIGHT_DEG
+from pcrp_core.confidence import expected_calibration_error, reliability
+from tools.paper_eval.metrics import geodesic_deg
+from tools.paper_eval.models import loaded
+
+OUTSIDE = (
+    'bottle',
+    'bowl',
+    'cone',
+    'cup',
+    'guitar',
+    'keyboard',
+    'lamp',
+    'person',
+    'plant',
+    'stairs',
+    'tent',
+    'vase',
+)
+TARGETS = {'right_accepted': 0.95, 'outside_rejected': 0.80, 'auc': 0.95}
+
+
+def answer_one(state: dict, q) -> dict:
+    model = loaded(state['model'])
+    r = model.estimate(q.points, viewpoint=q.viewpoint)
+    error = geodesic_deg(r.rotation, q.R)
+    return {
+        'name': q.name,
+        'category': q.category,
+        'inside': q.category in state['inside'],
+        'kind': 'whole' if q.viewpoint is None else 'view',
+        'retrieved_category': r.category,
+        'error': error,
+        'confidence': float(r.confidence),
+        'rejected': bool(r.rejected),
+        'right': r.category == q.category and error < RIGHT_DEG,
+    }
+
+
+def summarise(rows: list[dict], threshold: float) -> dict:
+    """Per kind of cloud (and both): the targets' figures, the ROC curve of right answers against
+    objects from outside the gallery, and a reliability table over all answers."""
+    from sklearn.metrics import roc_auc_score, roc_curve
+
+    out = {}
+    for kind in ('whole', 'view', 'all'):
+        sel = [r for r in rows if kind in ('all', r['kind'])]
+        if not sel:
+            continue
+        right = [r for r in sel if r['inside'] and r['right']]
+        outside = [r for r in sel if not r['inside']]
+        inside = [r for r in sel if r['inside']]
+        d = {
+            'n_inside': len(inside),
+            'n_right': len(right),
+            'n_outside': len(outside),
+            'right_share': len(right) / max(1, len(inside)),
+            'right_accepted': (
+                float(np.mean([r['confidence'] >= threshold for r in right])) if right else np.nan
+            ),
+            'outside_rejected': (
+                float(np.mean([r['confidence'] < threshold for r in outside]))
+                if outside
+                else np.nan
+            ),
+            'wrong_inside_rejected': (
+                float(np.mean([r['confidence'] < threshold for r in inside if not r['right']]))
+                if len(right) < len(inside)
+                else np.nan
+            ),
+        }
+        if right and outside:
+            y = [1] * len(right) + [0] * len(outside)
+            c = [r['confidence'] for r in right + outside]
+            d['auc'] = float(roc_auc_score(y, c))
+            fpr, tpr, _ = roc_curve(y, c)
+            d['roc'] = [fpr.tolist(), tpr.tolist()]
+        conf, ok = [r['confidence'] for r in sel], [r['right'] for r in sel]
+        d['reliability'] = reliability(conf, ok)
+        d['ece'] = expected_calibration_error(conf, ok)
+        out[kind] = d
+    return out
+
+
+def plot(summary: dict, path) -> bool:
+    """Reliability diagram (share right against confidence) and ROC curves, one line per kind."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4.2))
+    for kind, style in (('whole', 'o-'), ('view', 's-'), ('all', 'k--')):
+        d = summary.get(kind)
+        if not d:
+            continue
+        rel = np.array(d['reliability'])
+        if len(rel):
+            a.plot(rel[:, 0], rel[:, 1], style, label=f"{kind} (ECE {d['ece']:.2f})")
+        if 'roc' in d:
+            b.plot(*d['roc'], style, label=f"{kind} (AUC {d['auc']:.2f})")
+    a.plot([0, 1], [0, 1], ':', color='grey')
+    a.set(
+        xlabel='confidence (mean in bin)', ylabel='share right', title='reliability, all answers'
+    )
+    b.plot([0, 1], [0, 1], ':', color='grey')
+    b.set(
+        xlabel='objects from outside the gallery accepted',
+        ylabel='right answers accepted',
+        title='ROC: right answers vs outside objects',
+    )
+    for ax in (a, b):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc='lower right')
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
