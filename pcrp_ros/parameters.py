@@ -53,7 +53,8 @@ class NodeSettings(Options):
     qos_reliability: str = setting(
         'best_effort', 'Input QoS reliability: best_effort (sensor data) or reliable.',
         choices=('best_effort', 'reliable'), read_only=True)
-    qos_depth: int = setting(5, 'Input QoS queue depth (5, as ROS sensor data).', low=1, high=100, read_only=True)
+    qos_depth: int = setting(
+        5, 'Input QoS queue depth (5, as ROS sensor data).', low=1, high=100, read_only=True)
     log_throttle_sec: float = setting(
         5.0, 'Least seconds between two log lines of one kind.', low=0.0, high=3600.0)
     queue_size: int = setting(
