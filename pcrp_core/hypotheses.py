@@ -25,6 +25,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+from pcrp_core.geometry import rotation_taking
 from pcrp_core.registration import ransac
 from pcrp_core.registration.correspondences import matches_within_halves
 from pcrp_core.registration.scoring import distances_back, mean_distance_batch
@@ -150,7 +151,8 @@ def view_seeds(
     Rs = np.concatenate(
         [
             (
-                Rotation.from_rotvec(np.outer(turns, d)) * Rotation.align_vectors([d], [v])[0]
+                Rotation.from_rotvec(np.outer(turns, d))
+                * Rotation.from_matrix(rotation_taking(v, d))
             ).as_matrix()
             for d in D
         ]
@@ -173,7 +175,7 @@ def view_seeds(
 
 def upright_turns(q_up, g_up, n: int) -> np.ndarray:
     """(n, 3, 3) rotations taking q_up onto g_up, turned by n even steps about g_up."""
-    stand = Rotation.align_vectors([g_up], [q_up])[0]
+    stand = Rotation.from_matrix(rotation_taking(q_up, g_up))
     turns = Rotation.from_rotvec(np.outer(np.arange(n) * 2 * np.pi / n, g_up))
     return (turns * stand).as_matrix()
 

@@ -31,6 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from pcrp_core.geometry import rotation_taking
 from pcrp_core.sources.camera import depth_points, Mesh, PinholeCamera, RangeNoise, render_depth
 from scipy.spatial.transform import Rotation
 
@@ -130,7 +131,7 @@ def table_pose(mesh: Mesh, rng: np.random.Generator, camera: PinholeCamera = Pin
     down = np.cross(forward, right)
     world_to_cam = np.stack([right, down, forward])
     # the least turn that brings the optical axis's point (the object's centre) to a central pixel
-    aim = Rotation.align_vectors([_central_ray(rng, camera)], [[0.0, 0.0, 1.0]])[0].as_matrix()
+    aim = rotation_taking([0.0, 0.0, 1.0], _central_ray(rng, camera))
     Rc = aim @ world_to_cam
     R = Rc @ Rz
     t = Rc @ (-Rz @ rest - eye)

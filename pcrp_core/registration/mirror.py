@@ -27,9 +27,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from pcrp_core.geometry import rotation_taking
 from pcrp_core.registration.icp import icp
 from scipy.spatial import cKDTree
-from scipy.spatial.transform import Rotation
 
 # the share of points whose mirror images are scored and matched: a few parts of a symmetric
 # object are not (a door handle on one side), and sampling leaves some images in gaps
@@ -124,7 +124,7 @@ def snap(R: np.ndarray, t: np.ndarray, plane: MirrorPlane, target: MirrorPlane,
     (target): a turn about the query's centroid, then a shift along the plane's normal.
     """
     # the shortest turn between two single vectors (as hypotheses.py aligns up axes)
-    C = Rotation.align_vectors([target.normal], [R @ plane.normal])[0].as_matrix()
+    C = rotation_taking(R @ plane.normal, target.normal)
     c = R @ query_centre + t
     R2, t2 = C @ R, C @ (t - c) + c
     on_plane = R2 @ (plane.offset * plane.normal) + t2
