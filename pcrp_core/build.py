@@ -1,4 +1,19 @@
-"""Building a model: fit the unsupervised features on the gallery, then describe every object.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Building a model: fit the unsupervised features on the gallery, then describe every object.
 
 FR-PointHop's Saab kernels and the VLAD codebook are fitted on the gallery's own objects (no
 labels), every object is described for retrieval, and when the objects come with meshes, what a
@@ -11,34 +26,49 @@ import dataclasses
 import time
 
 import numpy as np
-
 from pcrp_core.config import PoseOptions
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
 from pcrp_core.geometry import normalised, unit_axis
-from pcrp_core.instance.templates import TemplateSettings
 from pcrp_core.instance.templates import stack as stack_templates
-from pcrp_core.parallel import object_features, object_mirror, object_templates, parallel_map, view_vectors
+from pcrp_core.instance.templates import TemplateSettings
+from pcrp_core.parallel import (object_features, object_mirror, object_templates, parallel_map,
+                                view_vectors)
 from pcrp_core.preprocess import downsample, finite_points
 from pcrp_core.visibility import sphere_directions
 from pcrp_core.vlad import VLAD
 
 
 def common_up(objects) -> np.ndarray | None:
-    """The up axis all objects' sources state, None when any is silent or they disagree (a
-    mixed gallery has no one up axis to hold answers to)."""
-    ups = {tuple(np.round(unit_axis(o.up), 6)) if getattr(o, 'up', None) is not None else None for o in objects}
+    """
+    Return the up axis all objects' sources state.
+
+    None when any is silent or they disagree (a mixed gallery has no one up axis to hold answers
+    to).
+    """
+    ups = {
+        tuple(np.round(unit_axis(o.up), 6)) if getattr(o, 'up', None) is not None else None
+        for o in objects
+    }
     return np.array(ups.pop()) if len(ups) == 1 and None not in ups else None
 
 
 def mirror_planes(clouds, unit: float, n_jobs: int | None = None, progress=None) -> np.ndarray:
-    """(n, 4) the mirror plane of each gallery cloud (as stored) in normalised units, NaN where
-    none, with PoseOptions' default tolerances: worked out here once rather than by the first
-    query that retrieves each object (a whole object's pose is finished on that plane)."""
+    """
+    (n, 4) the mirror plane of each gallery cloud (as stored) in normalised units.
+
+    NaN where none, with PoseOptions' default tolerances: worked out here once rather than by the
+    first query that retrieves each object (a whole object's pose is finished on that plane).
+    """
     pose = PoseOptions()
-    rows = parallel_map(object_mirror, [normalised(c, unit) for c in clouds],
-                        {'tolerance': pose.mirror_tolerance, 'max_deg': pose.mirror_max_deg}, n_jobs, progress,
-                        'mirror planes')
+    rows = parallel_map(
+        object_mirror,
+        [normalised(c, unit) for c in clouds],
+        {'tolerance': pose.mirror_tolerance, 'max_deg': pose.mirror_max_deg},
+        n_jobs,
+        progress,
+        'mirror planes',
+    )
     return np.stack(rows) if rows else np.zeros((0, 4))
 
 
@@ -46,8 +76,10 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
                 n_points: int = 1024, fit_clouds: int = 400, energy_threshold1: float = 1e-3,
                 energy_threshold2: float = 5e-4, views: int = 0, seed: int = 0, sources=(),
                 progress=None, n_jobs: int | None = None, up_axis=None, calibrate: bool = True):
-    """A PCRP model of the gallery objects (GalleryObject-like: gallery_id, category, points and
-    optionally up and mesh), pre-aligned.
+    """
+    Return a PCRP model of the pre-aligned gallery objects.
+
+    The objects are GalleryObject-like: gallery_id, category, points and optionally up and mesh.
 
     fit_clouds bounds how many objects the Saab kernels are fitted on (PCA needs far fewer
     samples than a large gallery has); views adds, per object, the descriptors of that many
@@ -72,7 +104,9 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
     pointhop = PointHop(hop1=hop1, energy_threshold1=energy_threshold1,
                         energy_threshold2=energy_threshold2, random_state=seed)
     pointhop.fit([normed[i] for i in fit_idx])
-    feats = parallel_map(object_features, normed, {'pointhop': pointhop}, n_jobs, progress, 'features')
+    feats = parallel_map(
+        object_features, normed, {'pointhop': pointhop}, n_jobs, progress, 'features'
+    )
     vlad = VLAD(n_clusters=n_clusters, aggregation=aggregation, random_state=seed)
     if aggregation == 'vlad':
         vlad.fit(np.concatenate(feats))
@@ -86,21 +120,43 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
             vectors += vs
             owners += [i] * len(vs)
     stored = [c.astype(np.float32) for c in clouds]
-    gallery = Gallery([o.gallery_id for o in objects], [o.category for o in objects], stored, np.stack(vectors),
-                      np.array(owners), mirror_planes(stored, unit, n_jobs, progress))
+    gallery = Gallery(
+        [o.gallery_id for o in objects],
+        [o.category for o in objects],
+        stored,
+        np.stack(vectors),
+        np.array(owners),
+        mirror_planes(stored, unit, n_jobs, progress),
+    )
     templates, settings = None, TemplateSettings(view_points=n_points)
     meshes = [getattr(o, 'mesh', None) for o in objects]
     if all(m is not None for m in meshes):
-        templates = stack_templates(parallel_map(object_templates, meshes, {'settings': settings, 'seed': seed},
-                                                 n_jobs, progress, 'camera views'))
-    meta = {'sources': list(sources), 'n_objects': len(objects), 'n_points': n_points, 'views': views,
-            'up_axis': None if up_axis is None else [float(v) for v in up_axis],
-            'feature_dim': int(pointhop.n_features_), 'built': time.strftime('%Y-%m-%dT%H:%M:%S'),
-            'templates': None if templates is None else dataclasses.asdict(settings)}
+        templates = stack_templates(
+            parallel_map(
+                object_templates,
+                meshes,
+                {'settings': settings, 'seed': seed},
+                n_jobs,
+                progress,
+                'camera views',
+            )
+        )
+    meta = {
+        'sources': list(sources),
+        'n_objects': len(objects),
+        'n_points': n_points,
+        'views': views,
+        'up_axis': None if up_axis is None else [float(v) for v in up_axis],
+        'feature_dim': int(pointhop.n_features_),
+        'built': time.strftime('%Y-%m-%dT%H:%M:%S'),
+        'templates': None if templates is None else dataclasses.asdict(settings),
+    }
     model = PCRP(pointhop, vlad, gallery, unit, meta, n_points, templates)
     if templates is not None and calibrate:
         from pcrp_core.instance.calibration import calibrate as calibrate_views
-        model.view_calibration, model.meta['twins'] = calibrate_views(model, meshes, n_jobs, progress)
+        model.view_calibration, model.meta['twins'] = calibrate_views(
+            model, meshes, n_jobs, progress
+        )
     if calibrate:
         from pcrp_core.category.calibration import calibrate as calibrate_category
         model.category_calibration = calibrate_category(model, n_jobs, progress)

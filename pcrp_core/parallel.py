@@ -1,11 +1,26 @@
-"""Describing many gallery objects on every core.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-Building a model is dominated by per-object features (FPFH and two hops), computed one object
-at a time and single-threaded inside Open3D and numpy for clouds this small, so objects are
-spread over worker processes. joblib's loky workers (joblib comes with scikit-learn) start as
-fresh interpreters: a plain fork after Open3D has run its OpenMP pool can hang the child, and
-multiprocessing's spawn re-runs the caller's script unless it has a __main__ guard. Objects go
-in chunks, so the fitted estimators are shipped once per chunk, not once per object.
+"""
+Describing many gallery objects on every core.
+
+Building a model is dominated by per-object features (FPFH and two hops), computed one object at a
+time and single-threaded inside Open3D and numpy for clouds this small, so objects are spread over
+worker processes. joblib's loky workers (joblib comes with scikit-learn) start as fresh
+interpreters: a plain fork after Open3D has run its OpenMP pool can hang the child, and
+multiprocessing's spawn re-runs the caller's script unless it has a __main__ guard. Objects go in
+chunks, so the fitted estimators are shipped once per chunk, not once per object.
 """
 from __future__ import annotations
 
@@ -15,38 +30,58 @@ import numpy as np
 
 
 def default_jobs() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return (
+        len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else (os.cpu_count() or 1)
+    )
 
 
 def _chunk(fn, state, items):
     return [fn(state, x) for x in items]
 
 
-def parallel_map(fn, items, state: dict, n_jobs: int | None = None, progress=None, desc: str = "", chunksize: int = 16):
-    """[fn(state, item) for item in items], in order, over n_jobs processes (default: every
-    core). With one job, or few items, it runs here without processes."""
+def parallel_map(
+    fn,
+    items,
+    state: dict,
+    n_jobs: int | None = None,
+    progress=None,
+    desc: str = '',
+    chunksize: int = 16,
+):
+    """
+    [fn(state, item) for item in items], in order, over n_jobs processes (default: every core).
+
+    With one job, or few items, it runs here without processes.
+    """
     items = list(items)
     wrap = progress or (lambda it, **_: it)
     n_jobs = default_jobs() if n_jobs is None else max(1, n_jobs)
     if n_jobs == 1 or len(items) < 2 * chunksize:
-        return [fn(state, x) for x in wrap(items, desc=desc, unit="obj")]
-    from joblib import Parallel, delayed
+        return [fn(state, x) for x in wrap(items, desc=desc, unit='obj')]
+    from joblib import delayed, Parallel
     chunks = [items[i:i + chunksize] for i in range(0, len(items), chunksize)]
-    results = Parallel(n_jobs=n_jobs, backend="loky", return_as="generator")(
+    results = Parallel(n_jobs=n_jobs, backend='loky', return_as='generator')(
         delayed(_chunk)(fn, state, c) for c in chunks)
-    return [r for part in wrap(results, desc=desc, unit=f"x{chunksize} obj", total=len(chunks)) for r in part]
+    return [
+        r
+        for part in wrap(results, desc=desc, unit=f'x{chunksize} obj', total=len(chunks))
+        for r in part
+    ]
 
 
 def object_features(state: dict, cloud: np.ndarray) -> np.ndarray:
-    return state["pointhop"].transform(cloud)[1]
+    return state['pointhop'].transform(cloud)[1]
 
 
 def object_mirror(state: dict, cloud: np.ndarray) -> np.ndarray:
-    """The mirror plane of one normalised gallery cloud as 4 numbers (registration/mirror.py)."""
-    from scipy.spatial import cKDTree
+    """
+    Return the mirror plane of one normalised gallery cloud as 4 numbers.
 
+    See registration/mirror.py.
+    """
     from pcrp_core.registration.mirror import gallery_mirror, plane_row
-    return plane_row(gallery_mirror(cloud, cKDTree(cloud), state["tolerance"], state["max_deg"]))
+    from scipy.spatial import cKDTree
+    return plane_row(gallery_mirror(cloud, cKDTree(cloud), state['tolerance'], state['max_deg']))
 
 
 def view_vectors(state: dict, cloud_and_cameras) -> list[np.ndarray]:
@@ -57,18 +92,18 @@ def view_vectors(state: dict, cloud_and_cameras) -> list[np.ndarray]:
     for cam in cameras:
         seen = cloud[visible_from(cloud, cam)]
         if len(seen) >= 64:
-            out.append(state["vlad"].transform(state["pointhop"].transform(seen, cam)[1]))
+            out.append(state['vlad'].transform(state['pointhop'].transform(seen, cam)[1]))
     return out
 
 
 def object_templates(state: dict, mesh) -> dict:
-    """What a camera sees of one gallery mesh (instance/templates.py)."""
+    """Return what a camera sees of one gallery mesh (instance/templates.py)."""
     from pcrp_core.instance.templates import object_templates as render
-    return render(mesh, state["settings"], seed=state["seed"])
+    return render(mesh, state['settings'], seed=state['seed'])
 
 
 def calibration_answers(state: dict, index_and_scene) -> dict:
     """One calibration view, answered (instance/calibration.py)."""
     from pcrp_core.instance.calibration import answer_view
     index, scene = index_and_scene
-    return answer_view(state["model"], index, scene)
+    return answer_view(state['model'], index, scene)

@@ -1,4 +1,19 @@
-"""PCRP, the model a user holds: its parts, its settings, and which way a cloud is answered.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+PCRP, the model a user holds: its parts, its settings, and which way a cloud is answered.
 
 A cloud is cleaned (preprocess.py), then answered one of two ways: view by view against camera
 templates when the gallery was built from meshes and the cloud comes from a camera at a known
@@ -8,15 +23,14 @@ viewpoint, in metres (instance/answer.py), else by PCRP's retrieval and registra
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
-
 from pcrp_core import model_io
-from pcrp_core.config import USER_POSE_SETTINGS, InstanceOptions, PoseOptions, QueryOptions
 from pcrp_core.confidence import Calibration
+from pcrp_core.config import InstanceOptions, PoseOptions, QueryOptions, USER_POSE_SETTINGS
 from pcrp_core.errors import ModelError
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
@@ -24,7 +38,7 @@ from pcrp_core.geometry import normalised, rms_radius, unit_axis, unit_vector
 from pcrp_core.instance.templates import Templates
 from pcrp_core.preprocess import clean
 from pcrp_core.result import PoseResult
-from pcrp_core.retrieval import PreparedCache, describe
+from pcrp_core.retrieval import describe, PreparedCache
 from pcrp_core.vlad import VLAD
 
 DEFAULT_MODEL = Path(__file__).parent / 'data' / 'default_model'
@@ -33,12 +47,13 @@ CATEGORY_CALIBRATION = 'confidence_category_'
 
 
 def default_model_path() -> Path:
-    """The small model shipped with the package, built from the procedural generator."""
+    """Return the small model shipped with the package, built from the procedural generator."""
     return DEFAULT_MODEL
 
 
 class PCRP:
-    """A gallery of pre-aligned objects and the unsupervised models fitted on it.
+    """
+    A gallery of pre-aligned objects and the unsupervised models fitted on it.
 
     Settings (pcrp_core.config): `options` (QueryOptions: what is done with each cloud),
     `pose_options` (PoseOptions: how PCRP registers) and `instance_options` (InstanceOptions:
@@ -46,9 +61,18 @@ class PCRP:
     (this model) or `with_options` (a variant sharing this model's gallery and caches).
     """
 
-    def __init__(self, pointhop: PointHop, vlad: VLAD, gallery: Gallery, unit: float, meta: dict | None = None,
-                 n_points: int = 1024, templates: Templates | None = None,
-                 view_calibration: Calibration | None = None, category_calibration: Calibration | None = None):
+    def __init__(
+        self,
+        pointhop: PointHop,
+        vlad: VLAD,
+        gallery: Gallery,
+        unit: float,
+        meta: dict | None = None,
+        n_points: int = 1024,
+        templates: Templates | None = None,
+        view_calibration: Calibration | None = None,
+        category_calibration: Calibration | None = None,
+    ):
         self.pointhop, self.vlad, self.gallery = pointhop, vlad, gallery
         self.templates, self.view_calibration = templates, view_calibration
         # the confidence of answers by retrieval and registration (category/calibration.py)
@@ -61,49 +85,67 @@ class PCRP:
         self.instance_options = InstanceOptions()
         self.prepared = PreparedCache(pointhop, gallery, self.unit)
         self._matcher = None
-        self.radii = np.array([rms_radius(c) for c in gallery.clouds]) if len(gallery) else np.zeros(0)
+        self.radii = (
+            np.array([rms_radius(c) for c in gallery.clouds]) if len(gallery) else np.zeros(0)
+        )
 
     @classmethod
     def build(cls, objects, **kwargs) -> 'PCRP':
-        """A model of the gallery objects: see build.build_model for the arguments."""
+        """Return a model of the gallery objects: see build.build_model for the arguments."""
         from pcrp_core.build import build_model
         return build_model(objects, **kwargs)
 
     # -- settings -------------------------------------------------------------------------------
     def get_params(self) -> dict:
-        """The user's settings (QueryOptions and USER_POSE_SETTINGS) and their values."""
+        """Return the user's settings (QueryOptions and USER_POSE_SETTINGS) and their values."""
         return {**{k: getattr(self.options, k) for k in self.options.__dataclass_fields__},
                 **{k: getattr(self.pose_options, k) for k in USER_POSE_SETTINGS}}
 
     def _options_with(self, changes: dict) -> tuple[QueryOptions, PoseOptions, InstanceOptions]:
         changes = dict(changes)
         if 'min_score' in changes:
-            warnings.warn('min_score is now min_confidence (a calibrated probability that the answer is right); '
-                          'min_score is taken as min_confidence', DeprecationWarning, stacklevel=3)
+            warnings.warn(
+                'min_score is now min_confidence (a calibrated probability that the answer is '
+                'right); min_score is taken as min_confidence',
+                DeprecationWarning,
+                stacklevel=3,
+            )
             changes.setdefault('min_confidence', changes.pop('min_score'))
             changes.pop('min_score', None)
         pose = {k: changes.pop(k) for k in list(changes) if k in USER_POSE_SETTINGS}
-        instance = {k: changes.pop(k) for k in list(changes) if k in InstanceOptions.__dataclass_fields__}
+        instance = {
+            k: changes.pop(k) for k in list(changes) if k in InstanceOptions.__dataclass_fields__
+        }
         return (self.options.replace(**changes), self.pose_options.replace(**pose),
                 self.instance_options.replace(**instance))
 
     def set_params(self, **changes) -> 'PCRP':
-        """Change settings by name (ValueError saying why for an unknown name or a bad value, and
-        then nothing changes). A cloud being answered meanwhile keeps the settings it started with."""
+        """
+        Change settings by name.
+
+        Raise ValueError saying why for an unknown name or a bad value, and then nothing changes. A
+        cloud being answered meanwhile keeps the settings it started with.
+        """
         self.options, self.pose_options, self.instance_options = self._options_with(changes)
         return self
 
     def with_options(self, pose: PoseOptions | None = None, **changes) -> 'PCRP':
-        """A variant of this model with other settings, sharing its gallery, kernels and caches:
-        pose replaces the pose settings wholesale (e.g. config.PAPER_POSE), changes set others
-        (any setting of QueryOptions, PoseOptions or InstanceOptions, by name)."""
+        """
+        Return a variant of this model with other settings.
+
+        Sharing its gallery, kernels and caches: pose replaces the pose settings wholesale (e.g.
+        config.PAPER_POSE), changes set others (any setting of QueryOptions, PoseOptions or
+        InstanceOptions, by name).
+        """
         variant = copy.copy(self)
         if pose is not None:
             variant.pose_options = pose
         pose_changes = {k: changes.pop(k) for k in list(changes)
                         if k in PoseOptions.__dataclass_fields__ and k not in USER_POSE_SETTINGS}
         variant.pose_options = variant.pose_options.replace(**pose_changes)
-        variant.options, variant.pose_options, variant.instance_options = variant._options_with(changes)
+        variant.options, variant.pose_options, variant.instance_options = variant._options_with(
+            changes
+        )
         return variant
 
     # -- gallery --------------------------------------------------------------------------------
@@ -119,12 +161,15 @@ class PCRP:
         return self.gallery.categories[self.gallery.index[gallery_id]]
 
     def gallery_cloud(self, gallery_id: str) -> np.ndarray:
-        """The gallery object's points in its own canonical frame and units."""
+        """Return the gallery object's points in its own canonical frame and units."""
         return self.gallery.clouds[self.gallery.index[gallery_id]]
 
     def subset(self, gallery_ids) -> 'PCRP':
-        """The same kernels, codebook and calibration over part of the gallery (one category,
-        the objects a task can meet): answers then consider only those objects."""
+        """
+        Return the same kernels, codebook and calibration over part of the gallery.
+
+        Part: one category, the objects a task can meet; answers then consider only those objects.
+        """
         keep = sorted({self.gallery.index[g] for g in gallery_ids})
         if not keep:
             raise ValueError('a gallery subset needs at least one object')
@@ -132,25 +177,51 @@ class PCRP:
         remap[keep] = np.arange(len(keep))
         rows = np.isin(self.gallery.owners, keep)
         g = self.gallery
-        gallery = Gallery([g.ids[i] for i in keep], [g.categories[i] for i in keep], [g.clouds[i] for i in keep],
-                          g.vectors[rows], remap[g.owners[rows]], None if g.mirrors is None else g.mirrors[keep])
+        gallery = Gallery(
+            [g.ids[i] for i in keep],
+            [g.categories[i] for i in keep],
+            [g.clouds[i] for i in keep],
+            g.vectors[rows],
+            remap[g.owners[rows]],
+            None if g.mirrors is None else g.mirrors[keep],
+        )
         templates = None if self.templates is None else self.templates.subset(keep)
-        model = PCRP(self.pointhop, self.vlad, gallery, self.unit, self.meta, self.n_points, templates,
-                     self.view_calibration, self.category_calibration)
-        model.options, model.pose_options, model.instance_options = (self.options, self.pose_options,
-                                                                     self.instance_options)
+        model = PCRP(
+            self.pointhop,
+            self.vlad,
+            gallery,
+            self.unit,
+            self.meta,
+            self.n_points,
+            templates,
+            self.view_calibration,
+            self.category_calibration,
+        )
+        model.options, model.pose_options, model.instance_options = (
+            self.options,
+            self.pose_options,
+            self.instance_options,
+        )
         return model
 
     @property
     def up_axis(self) -> np.ndarray | None:
-        """The gallery objects' up axis in their canonical frame (unit vector), None when the
-        model does not say (models built before it was recorded, or from sources that disagree)."""
+        """
+        Return the gallery objects' up axis in their canonical frame (unit vector).
+
+        None when the model does not say (models built before it was recorded, or from sources that
+        disagree).
+        """
         up = self.meta.get('up_axis')
         return None if up is None else np.asarray(up, dtype=np.float64)
 
     def check_up(self, up) -> np.ndarray:
-        """up as estimate() uses it (a unit vector); ValueError saying why it cannot be used: not
-        a finite non-zero 3-vector, or a model that does not record its objects' up axis."""
+        """
+        Return up as estimate() uses it (a unit vector).
+
+        Raise ValueError saying why it cannot be used: not a finite non-zero 3-vector, or a model
+        that does not record its objects' up axis.
+        """
         u = unit_vector(up)
         if u is None:
             raise ValueError(f'up must be a finite, non-zero 3-vector, not {up!r}')
@@ -164,8 +235,11 @@ class PCRP:
         kernels = sum(v.nbytes for v in self.pointhop.get_state().values())
         codebook = self.vlad.codebook_.nbytes if self.vlad.aggregation == 'vlad' else 0
         clouds = sum(c.nbytes for c in self.gallery.clouds)
-        text = (f'kernels {kernels / 1e3:.0f} kB, codebook + VLAD vectors '
-                f'{(codebook + self.gallery.vectors.nbytes) / 1e6:.2f} MB, gallery clouds {clouds / 1e6:.1f} MB')
+        text = (
+            f'kernels {kernels / 1e3:.0f} kB, codebook + VLAD vectors '
+            f'{(codebook + self.gallery.vectors.nbytes) / 1e6:.2f} MB, gallery clouds '
+            f'{clouds / 1e6:.1f} MB'
+        )
         if self.templates is not None:
             size = sum(v.nbytes for v in self.templates.to_arrays().values())
             text += f', camera templates {size / 1e6:.1f} MB'
@@ -195,7 +269,9 @@ class PCRP:
         meta, arrays = model_io.read_model(path)
         try:
             pointhop = PointHop.from_state(meta['pointhop'], arrays)
-            vlad = VLAD(n_clusters=meta['vlad']['n_clusters'], aggregation=meta['vlad']['aggregation'])
+            vlad = VLAD(
+                n_clusters=meta['vlad']['n_clusters'], aggregation=meta['vlad']['aggregation']
+            )
             if vlad.aggregation == 'vlad':
                 vlad.codebook_ = arrays['vlad_codebook']
             gallery = Gallery.from_arrays(meta['gallery_ids'], meta['gallery_categories'], arrays)
@@ -208,20 +284,30 @@ class PCRP:
                         Calibration.from_arrays(arrays, VIEW_CALIBRATION),
                         Calibration.from_arrays(arrays, CATEGORY_CALIBRATION))
         except (KeyError, TypeError, ValueError) as e:
-            raise ModelError(f'{path}: model contents are incomplete or inconsistent ({type(e).__name__}: {e})') from None
+            raise ModelError(
+                f'{path}: model contents are incomplete or inconsistent ({type(e).__name__}: {e})'
+            ) from None
         model.meta['path'] = str(path)
         return model
 
     # -- querying -------------------------------------------------------------------------------
     def prepare(self, points) -> np.ndarray:
-        """The cloud as estimate() will use it: finite, at most max_points, checked for geometry a
-        pose can be read from (raises InvalidCloud otherwise). Cheap; a stream can call it on
-        arrival, to refuse bad clouds at once and queue only usable ones."""
+        """
+        Return the cloud as estimate() will use it.
+
+        Finite, at most max_points, checked for geometry a pose can be read from (raises
+        InvalidCloud otherwise). Cheap; a stream can call it on arrival, to refuse bad clouds at
+        once and queue only usable ones.
+        """
         opts = self.options
         return clean(points, min(opts.max_points, self.n_points), opts.min_points, opts.seed)
 
     def retrieve(self, points, k: int = 10, viewpoint=None) -> list[tuple[str, float]]:
-        """The k gallery objects whose VLAD vectors are nearest the query's, with distances."""
+        """
+        Return the k gallery objects whose VLAD vectors are nearest the query's.
+
+        With their distances.
+        """
         pts = self.prepare(points)
         vp = None if viewpoint is None else normalised(viewpoint, self.unit, pts.mean(0))
         _, _, vec = describe(self.pointhop, self.vlad, normalised(pts, self.unit), vp)
@@ -229,29 +315,34 @@ class PCRP:
         return [(self.gallery.ids[i], float(d)) for i, d in zip(idx, dist)]
 
     def uses_views(self, viewpoint, opts: QueryOptions | None = None) -> bool:
-        """Whether a cloud is matched view by view (instance/): the model has templates (built from
-        meshes), the cloud comes from a sensor at a known viewpoint, sizes are metric, and the
-        method setting allows it."""
+        """
+        Whether a cloud is matched view by view (instance/).
+
+        The model has templates (built from meshes), the cloud comes from a sensor at a known
+        viewpoint, sizes are metric, and the method setting allows it.
+        """
         opts = self.options if opts is None else opts
         return (self.templates is not None and viewpoint is not None and opts.method != 'pcrp'
                 and opts.scale_mode == 'metric')
 
     @property
     def matcher(self):
-        """The view-by-view matcher of this model's templates, made on first use."""
+        """Return the view-by-view matcher of this model's templates, made on first use."""
         if self._matcher is None:
             from pcrp_core.instance.matcher import InstanceMatcher
             self._matcher = InstanceMatcher(self.templates)
         return self._matcher
 
     def estimate(self, points, viewpoint=None, up=None) -> PoseResult:
-        """Which gallery object the cloud is, and its pose. Raises InvalidCloud for input no pose
-        can be read from.
+        """
+        Which gallery object the cloud is, and its pose.
 
-        viewpoint: the sensor's position in the cloud's frame when the cloud is what one sensor
-        saw (np.zeros(3) for a cloud in the camera's own frame); None for complete objects.
-        up: which way is up in the cloud's frame (against gravity), when the caller knows it;
-        answers then keep the gallery's up axis (`up_axis`) on it. None: any orientation.
+        Raises InvalidCloud for input no pose can be read from.
+
+        viewpoint: the sensor's position in the cloud's frame when the cloud is what one sensor saw
+        (np.zeros(3) for a cloud in the camera's own frame); None for complete objects. up: which
+        way is up in the cloud's frame (against gravity), when the caller knows it; answers then
+        keep the gallery's up axis (`up_axis`) on it. None: any orientation.
         """
         from pcrp_core.category import answer as category
         from pcrp_core.instance import answer as views
@@ -264,5 +355,7 @@ class PCRP:
         pts = clean(points, min(opts.max_points, self.n_points), opts.min_points, opts.seed)
         timings = {'preprocess': time.perf_counter() - t0}
         if self.uses_views(viewpoint, opts):
-            return views.answer(self, pts, np.asarray(viewpoint, dtype=np.float64), up_pair, opts, timings, t0)
+            return views.answer(
+                self, pts, np.asarray(viewpoint, dtype=np.float64), up_pair, opts, timings, t0
+            )
         return category.answer(self, pts, viewpoint, up_pair, opts, pose_opts, timings, t0)

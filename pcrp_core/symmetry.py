@@ -1,10 +1,25 @@
-"""The paper's symmetry split: cut a cloud in two across its most balanced principal axis.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The paper's symmetry split: cut a cloud in two across its most balanced principal axis.
 
 Many man-made objects are mirror-symmetric (a chair's left and right), and rotation-invariant
-features cannot tell a point from its mirror image, so matches jump across the symmetry
-plane. Matching only within corresponding halves removes those matches. Which half of the
-query corresponds to which half of the gallery object is not known (the axis has no sign),
-so registration tries both pairings and keeps the one that fits.
+features cannot tell a point from its mirror image, so matches jump across the symmetry plane.
+Matching only within corresponding halves removes those matches. Which half of the query
+corresponds to which half of the gallery object is not known (the axis has no sign), so
+registration tries both pairings and keeps the one that fits.
 """
 from __future__ import annotations
 
@@ -19,7 +34,8 @@ def principal_axes(points: np.ndarray) -> np.ndarray:
 
 
 def symmetry_axis(points: np.ndarray) -> np.ndarray:
-    """The principal axis along which the cloud's 1-D distribution is most balanced.
+    """
+    Return the principal axis along which the cloud's 1-D distribution is most balanced.
 
     Balance is measured by the odd moments (third and fifth, standardised): a mirror-
     symmetric distribution has none.

@@ -24,30 +24,4 @@ import os
 
 PACKAGE_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-NOT_YET_LINTED = [
-    'pcrp_core/build.py',
-    'pcrp_core/category',
-    'pcrp_core/config.py',
-    'pcrp_core/evaluation',
-    'pcrp_core/features',
-    'pcrp_core/gallery.py',
-    'pcrp_core/hypotheses.py',
-    'pcrp_core/parallel.py',
-    'pcrp_core/pipeline.py',
-    'pcrp_core/registration',
-    'pcrp_core/retrieval.py',
-    'pcrp_core/symmetry.py',
-    'tools/bench.py',
-    'tools/paper_eval',
-    'tools/robot_open3d.py',
-    'tools/robot_report.py',
-    'tools/robot_twins.py',
-    'tools/robot_writer.py',
-    'test/integration/test_pipeline.py',
-    'test/tools/test_bench.py',
-    'test/tools/test_evaluation.py',
-    'test/tools/test_robot_eval.py',
-    'test/unit/test_model_io.py',
-    'test/unit/test_registration.py',
-    'test/integration/test_category_confidence.py',
-]
+NOT_YET_LINTED = []

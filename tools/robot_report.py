@@ -1,4 +1,19 @@
-"""`python -m tools robot-report`: pcrp on the YCB objects as a robot's depth camera sees them.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+`python -m tools robot-report`: pcrp on the YCB objects as a robot's depth camera sees them.
 
 pcrp's model is built as the README tells a user (`pcrp build <meshes> --up-axis z`) and answered
 with its defaults; Open3D's FPFH + RANSAC / FGR + ICP answer the same views, told the object
@@ -119,9 +134,12 @@ def _git(*args) -> str:
 
 
 def code_key() -> str:
-    """A name for the code that builds a model: the package's files as committed, and any
-    uncommitted change to them, less the report-only modules. A model cached under another key
-    was built by other code, so is built again."""
+    """
+    Return a name for the code that builds a model.
+
+    The package's files as committed, and any uncommitted change to them, less the report-only
+    modules. A model cached under another key was built by other code, so is built again.
+    """
     try:
         listed = [line for line in _git('ls-tree', '-r', 'HEAD', '--', 'pcrp_core').splitlines()
                   if line.split('\t')[-1] not in NOT_BUILD_CODE]
@@ -135,8 +153,11 @@ def code_key() -> str:
 
 
 def mesh_files(data: Path) -> dict[str, Path]:
-    """gallery ID -> file, as `pcrp build` names a folder's objects (the stem; `category/stem`
-    in a sub-folder)."""
+    """
+    Map gallery ID -> file, as `pcrp build` names a folder's objects.
+
+    The stem; `category/stem` in a sub-folder.
+    """
     from pcrp_core.sources.folder import MESH_SUFFIXES
 
     files = {}
@@ -148,8 +169,12 @@ def mesh_files(data: Path) -> dict[str, Path]:
 
 
 def build_model(data: Path, cache: Path, rebuild: bool = False, without=()) -> Path:
-    """The model the README's recipe builds from the meshes in data (less those `without`, from
-    a folder of links to the others), cached under the code that builds it."""
+    """
+    Return the model the README's recipe builds from the meshes in data.
+
+    Less those `without` (from a folder of links to the others), cached under the code that builds
+    it.
+    """
     without = sorted(without)
     name = f'{data.resolve().name}_{code_key()}'
     source = data
@@ -183,7 +208,7 @@ def build_model(data: Path, cache: Path, rebuild: bool = False, without=()) -> P
 
 
 def held_out(ids: list[str], twins, n: int, seed: int = HOLDOUT_SEED) -> list[str]:
-    """n objects (or a few fewer) in a seeded order, each taken with its twins."""
+    """Return n objects (or a few fewer) in a seeded order, each taken with its twins."""
     import numpy as np
 
     partners = defaultdict(set)
@@ -202,8 +227,11 @@ def held_out(ids: list[str], twins, n: int, seed: int = HOLDOUT_SEED) -> list[st
 
 
 def lookalikes(held: list[str], kept: list[str], chamfers, within: float = LOOKALIKE) -> dict:
-    """held-out object -> the objects left in the gallery whose shape is within `within` of
-    its (chamfer table): with those there, the object is nearly a known one."""
+    """
+    Return held-out object -> the objects left in the gallery within `within` of its shape.
+
+    Within by the chamfer table: with those there, the object is nearly a known one.
+    """
     kept = set(kept)
     near = defaultdict(list)
     for a, b, c in chamfers:
@@ -229,9 +257,8 @@ def _options(model) -> dict:
 
 
 def _baselines(scenes, targets, truths, twins, progress):
-    """The Open3D rows of the scenes, and how the size gate of their retrieval went."""
+    """Return the Open3D rows of the scenes, and how the size gate of their retrieval went."""
     import numpy as np
-
     from pcrp_core.evaluation.run import record
     from tools import robot_open3d as ro
 
@@ -256,8 +283,6 @@ def _baselines(scenes, targets, truths, twins, progress):
 
 def run(data: Path, split: str, views: int, quick: bool, cache: Path, rebuild: bool = False,
         baseline_views: int | None = None) -> dict:
-    import numpy as np
-
     from pcrp_core import PCRP
     from pcrp_core.cli import _progress
     from pcrp_core.evaluation.run import evaluate, Truths, twin_pairs

@@ -1,4 +1,19 @@
-"""ROBOT.md, robot.json and the figures from robot_report.run's results.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+ROBOT.md, robot.json and the figures from robot_report.run's results.
 
 Every figure in the text is computed here from the per-view records, so re-rendering from a
 robot.json (`--from-json`) gives the same report, and no sentence can drift from its numbers.
@@ -10,7 +25,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-
 from pcrp_core.confidence import expected_calibration_error, reliability
 from pcrp_core.evaluation import metrics
 from pcrp_core.evaluation.run import cell, COLUMNS, jsonable, statistics, summarise
@@ -59,7 +73,11 @@ def _pct(x) -> str:
 
 
 def _pct1(x) -> str:
-    """A share to a tenth of a percent: where it is held against a bar, 5 % must not hide 5.4."""
+    """
+    Return a share to a tenth of a percent.
+
+    Where it is held against a bar, 5 % must not hide 5.4.
+    """
     return '-' if x is None or not np.isfinite(x) else f'{100 * x:.1f} %'
 
 
@@ -103,8 +121,11 @@ def _confidences(rows: list[dict]) -> tuple[list[float], list[float]]:
 
 
 def _unknown_split(res: dict, name: str | None = None):
-    """(known rows, unknown rows, unknown rows with a look-alike left, without) of the held-out
-    model, one scenario or (None) all."""
+    """
+    (known rows, unknown rows, unknown rows with a look-alike left, without) of the held-out model.
+
+    One scenario or (None) all.
+    """
     rows = [r for n, per in res['unknown'].items() if name is None or n == name for r in per]
     near = res['held_out']['lookalikes']
     known = [r for r in rows if r['known']]
@@ -114,8 +135,12 @@ def _unknown_split(res: dict, name: str | None = None):
 
 
 def _unknown_auc(known: list[dict], unknown: list[dict]) -> float:
-    """ROC AUC of confidence: the held-out model's right answers on known objects against its
-    answers on unknown ones (which are all wrong, whatever they name)."""
+    """
+    ROC AUC of confidence.
+
+    The held-out model's right answers on known objects against its answers on unknown ones (which
+    are all wrong, whatever they name).
+    """
     right = [r['confidence'] for r in _answered(known) if r['pose_right']]
     return metrics.roc_auc(right, [r['confidence'] for r in _answered(unknown)])
 
@@ -128,7 +153,7 @@ def _unknown_rejected(rows: list[dict], threshold: float) -> float:
 
 # -- figures ------------------------------------------------------------------------------------
 def _figure(n_panels: int, grid: bool = False):
-    """A row of panels, or (grid) two columns of them, for figures read panel by panel."""
+    """Return a row of panels, or (grid) two columns of them, for figures read panel by panel."""
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -241,8 +266,12 @@ def _overall(res: dict, summaries: dict) -> str:
 
 
 def _headline(res: dict, summaries: dict) -> str:
-    """One row per scenario: what pcrp gets right, how its confidence sorts it, how fast, and
-    the baselines' pose right beside it (on their views)."""
+    """
+    One row per scenario.
+
+    What pcrp gets right, how its confidence sorts it, how fast, and the baselines' pose right
+    beside it (on their views).
+    """
     threshold = _min_confidence(res)
     base = [m for m in ('ransac', 'fgr', 'ransac_told') if m in res['methods']]
     rows = []

@@ -1,7 +1,22 @@
-"""Answering by retrieval and registration: PCRP's pipeline, with this package's extensions.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-The cloud is described by FR-PointHop and VLAD, the nearest gallery objects are retrieved, and
-the Registrar (registrar.py) registers it to them and lets them vote on the rotation. Works for any
+"""
+Answering by retrieval and registration: PCRP's pipeline, with this package's extensions.
+
+The cloud is described by FR-PointHop and VLAD, the nearest gallery objects are retrieved, and the
+Registrar (registrar.py) registers it to them and lets them vote on the rotation. Works for any
 gallery and any cloud (whole or one-sided, known size or not); galleries of meshes answer clouds
 from a camera view by view instead (instance/answer.py).
 """
@@ -11,7 +26,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from pcrp_core.category import evidence
 from pcrp_core.category.prepared import prepare
 from pcrp_core.category.registrar import Registrar
@@ -33,13 +47,16 @@ def answer(
     evidence_out: dict | None = None,
     exclude=None,
 ) -> PoseResult:
-    """The PoseResult of a cleaned cloud pts (see PCRP.estimate for the arguments);
+    """
+    Return the PoseResult of a cleaned cloud pts (see PCRP.estimate for the arguments).
+
     evidence_out, when given, gets the answer's named evidence (evidence.py); exclude: gallery
     indices answered as if the gallery lacked them (calibration.py).
 
     Units: every cloud is centred and divided by the model-wide unit. In metric mode the query
     keeps its size (scale 1); in normalize mode it is resized to the gallery's typical size,
-    then to the first candidate's, and the reported scale is query size / gallery object size."""
+    then to the first candidate's, and the reported scale is query size / gallery object size.
+    """
     centre = pts.mean(0)
     size = 1.0
     if opts.scale_mode == 'normalize':

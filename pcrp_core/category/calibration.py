@@ -1,5 +1,22 @@
-"""A confidence for the category-level path, learnt when the model is built on the gallery's own
-objects, with seeds of its own (CALIBRATION_SEED: never a benchmark's).
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A confidence for the category-level path.
+
+Learnt when the model is built on the gallery's own objects, with seeds of its own
+(CALIBRATION_SEED: never a benchmark's).
 
 A robot meets three kinds of object: one the gallery holds, an instance of a known category
 that the gallery does not hold (every category-level query is one), and an object of a
@@ -16,7 +33,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from pcrp_core.category.evidence import FEATURES, RIGHT_DEG
 
 CALIBRATION_SEED = 3_000_017
@@ -32,9 +48,12 @@ def rotation_error_deg(R_est: np.ndarray, R_true: np.ndarray) -> float:
 
 
 def calibration_queries(model, per_category: int = PER_CATEGORY, seed: int = CALIBRATION_SEED):
-    """(gallery index, points, viewpoint or None, true rotation) of each calibration query: up to
-    per_category objects of each category (an eighth of it at most, TOTAL in all), whole and
-    one-sided."""
+    """
+    (gallery index, points, viewpoint or None, true rotation) of each calibration query.
+
+    Up to per_category objects of each category (an eighth of it at most, TOTAL in all), whole and
+    one-sided.
+    """
     from pcrp_core.sources.views import partial_view, random_rotation
 
     rng = np.random.default_rng(seed)
@@ -61,8 +80,11 @@ def calibration_queries(model, per_category: int = PER_CATEGORY, seed: int = CAL
 
 
 def answer_without(model, points, viewpoint, drop, evidence_out: dict):
-    """model.estimate(points, viewpoint) by the category-level path as if the gallery lacked the
-    objects drop (indices), its evidence into evidence_out."""
+    """
+    Return model.estimate(points, viewpoint) by the category-level path.
+
+    As if the gallery lacked the objects drop (indices), its evidence into evidence_out.
+    """
     from pcrp_core.category.answer import answer
 
     t0 = time.perf_counter()
@@ -82,8 +104,12 @@ def answer_without(model, points, viewpoint, drop, evidence_out: dict):
 
 
 def answer_query(state: dict, item) -> list[tuple[dict, bool]]:
-    """(evidence, right) of one calibration query answered as it is, with its object left out
-    and, when the gallery holds other categories, with its whole category left out."""
+    """
+    (evidence, right) of one calibration query answered as it is.
+
+    With its object left out and, when the gallery holds other categories, with its whole category
+    left out.
+    """
     model = state['model']
     index, points, viewpoint, R = item
     category = model.gallery.categories[index]
@@ -100,8 +126,11 @@ def answer_query(state: dict, item) -> list[tuple[dict, bool]]:
 
 
 def calibrate(model, n_jobs=None, progress=None, per_category: int = PER_CATEGORY):
-    """The Calibration of the model's category-level answers, or None when its calibration
-    answers are all right or all wrong (nothing to learn from)."""
+    """
+    Return the Calibration of the model's category-level answers.
+
+    Or None when its calibration answers are all right or all wrong (nothing to learn from).
+    """
     from pcrp_core.confidence import fit_calibration
     from pcrp_core.parallel import parallel_map
 

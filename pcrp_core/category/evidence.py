@@ -1,5 +1,21 @@
-"""What an answer of the category-level path says about itself: the named features a calibrated
-confidence (pcrp_core/confidence.py) is learnt on.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+What an answer of the category-level path says about itself.
+
+The named features a calibrated confidence (pcrp_core/confidence.py) is learnt on.
 
 A right answer (right category, rotation within RIGHT_DEG) differs from a wrong one in two ways
 that registration can see. An object from outside the gallery fits no candidate well and its
@@ -11,7 +27,6 @@ right one, so the margin of the vote over the best other pose is small.
 from __future__ import annotations
 
 import numpy as np
-
 from pcrp_core.category.vote import vote_scores, voting_candidates
 
 FEATURES = (
@@ -30,13 +45,15 @@ NO_RIVAL = 1.0  # the pose margin when no other pose was voted on
 
 
 def from_vote(ch: np.ndarray, groups, k: int, weight: float) -> dict:
-    """Evidence the vote gives, ch: (hypotheses, candidates) chamfers, k: the chosen hypothesis.
+    """
+    Evidence the vote gives, ch: (hypotheses, candidates) chamfers, k: the chosen hypothesis.
 
     pose_margin: how much worse the best other hypothesis scores (vote_scores, relative to the
-    chosen one's score); agreement: the share of voting candidates whose own best hypothesis is
-    the chosen one; candidate_ratio: the best candidate's fit of the chosen pose over the second
-    best's (well under 1 when one candidate is the very object); category_share: the share of
-    candidates that vote (of the best-fitting candidate's category)."""
+    chosen one's score); agreement: the share of voting candidates whose own best hypothesis is the
+    chosen one; candidate_ratio: the best candidate's fit of the chosen pose over the second best's
+    (well under 1 when one candidate is the very object); category_share: the share of candidates
+    that vote (of the best-fitting candidate's category).
+    """
     voters = voting_candidates(ch, groups)
     scores = vote_scores(ch, voters, weight)
     others = np.delete(scores, k)
@@ -53,7 +70,7 @@ def from_vote(ch: np.ndarray, groups, k: int, weight: float) -> dict:
 
 
 def alone() -> dict:
-    """The same when there was no vote (one candidate, or the vote switched off)."""
+    """Return the same when there was no vote (one candidate, or the vote switched off)."""
     return {
         'pose_margin': NO_RIVAL,
         'agreement': 1.0,
@@ -63,8 +80,12 @@ def alone() -> dict:
 
 
 def features(vote_evidence: dict, hyp, averaged: int, distance: float, whole: bool) -> dict:
-    """The named FEATURES of one answer: hyp its final hypothesis, averaged how many candidates'
-    poses it averages, distance the retrieval distance of the first candidate."""
+    """
+    Return the named FEATURES of one answer.
+
+    hyp its final hypothesis, averaged how many candidates' poses it averages, distance the
+    retrieval distance of the first candidate.
+    """
     return {
         **vote_evidence,
         'fitness': float(hyp.fitness),

@@ -1,11 +1,26 @@
-"""Refining a pose on one gallery object and scoring how well it sits there: the one operation
-every stage of registration (hypotheses, the vote, the final refinement) repeats."""
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Refining a pose on one gallery object and scoring how well it sits there.
+
+The one operation every stage of registration (hypotheses, the vote, the final refinement) repeats.
+"""
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
-
 from pcrp_core.category.hypothesis import Hypothesis
 from pcrp_core.category.prepared import Prepared
 from pcrp_core.config import PoseOptions
@@ -13,15 +28,18 @@ from pcrp_core.registration import fit_quality_batch, icp_batch
 from pcrp_core.registration.icp import transform_batch
 from pcrp_core.registration.scoring import distances_back
 from pcrp_core.visibility import visible_from
+from scipy.spatial import cKDTree
 
 
 class Fitter:
-    """Holds the query's subsample used for ICP and scoring, so it is drawn once per query.
+    """
+    Holds the query's subsample used for ICP and scoring, so it is drawn once per query.
 
-    The score (Hypothesis.chamfer, lower is better) is the trimmed distance from the posed query
-    to the gallery object plus, for a whole cloud, the gallery's points far from the query (what
-    is missing is evidence) or, for a one-sided view, the gallery's points the sensor would see
-    under the pose but the query lacks."""
+    The score (Hypothesis.chamfer, lower is better) is the trimmed distance from the posed query to
+    the gallery object plus, for a whole cloud, the gallery's points far from the query (what is
+    missing is evidence) or, for a one-sided view, the gallery's points the sensor would see under
+    the pose but the query lacks.
+    """
 
     def __init__(
         self, query: Prepared, opts: PoseOptions, rng: np.random.Generator, viewpoint=None
@@ -46,8 +64,11 @@ class Fitter:
     def refine_many(
         self, Rs, ts, gallery: Prepared, iterations: int, sources, coarse: bool = True, prev=None
     ) -> list[Hypothesis]:
-        """refine() of several poses on one gallery object, sharing its tree queries; prev
-        resumes ICP runs that stopped at those poses (see icp_batch)."""
+        """
+        refine() of several poses on one gallery object, sharing its tree queries.
+
+        prev resumes ICP runs that stopped at those poses (see icp_batch).
+        """
         opts = self.opts
         src, tree = (self.coarse_src, self.coarse_tree) if coarse else (self.src, self.tree)
         Rs, ts = np.asarray(Rs, dtype=np.float64), np.asarray(ts, dtype=np.float64)
@@ -93,10 +114,13 @@ class Fitter:
         ]
 
     def _unexplained(self, tree: cKDTree, R, t, gallery: Prepared) -> float:
-        """Trimmed mean distance from the gallery points the sensor would see under this pose
-        to the query. A one-sided view only says what is there, not what is missing; seen
-        from the sensor, the posed gallery object must show what the query shows, which is
-        what tells a sofa seen from the front from one seen from behind."""
+        """
+        Return the trimmed mean distance from the gallery points the sensor would see to the query.
+
+        Seen under this pose. A one-sided view only says what is there, not what is missing; seen
+        from the sensor, the posed gallery object must show what the query shows, which is what
+        tells a sofa seen from the front from one seen from behind.
+        """
         g = gallery.points[:: max(1, len(gallery.points) // 256)]
         vis = g[visible_from(g, R @ self.viewpoint + t)]
         if len(vis) == 0:

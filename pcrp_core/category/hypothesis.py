@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """A pose hypothesis as registration carries it, with how well it fits; distinct ones."""
 
 from __future__ import annotations
@@ -40,7 +54,7 @@ def rotation_cosine(A: np.ndarray, B: np.ndarray) -> float:
 
 
 def distinct(hyps, n: int, min_angle_deg: float = 10.0) -> list[Hypothesis]:
-    """The first n of hyps (best first) whose rotations differ by more than min_angle."""
+    """Return the first n of hyps (best first) whose rotations differ by more than min_angle."""
     kept = []
     cos_min = np.cos(np.radians(min_angle_deg))
     for h in hyps:

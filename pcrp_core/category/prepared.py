@@ -1,20 +1,41 @@
-"""A cloud ready to register: its points and tree, and for feature matching its sampled points,
-their features and their symmetry halves."""
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A cloud ready to register.
+
+Its points and tree, and for feature matching its sampled points, their features and their symmetry
+halves.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
-
 from pcrp_core.symmetry import split_halves
+from scipy.spatial import cKDTree
 
 
 @dataclass
 class Prepared:
-    """One cloud ready to register: all points and their tree; for feature matching also the
-    sampled points, their features and their symmetry halves (None where not computed)."""
+    """
+    One cloud ready to register.
+
+    All points and their tree; for feature matching also the sampled points, their features and
+    their symmetry halves (None where not computed).
+    """
 
     points: np.ndarray
     tree: cKDTree

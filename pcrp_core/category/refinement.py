@@ -1,6 +1,22 @@
-"""The final pose: the chosen hypothesis refined in full on the candidates that fit it nearly as
-well as the best, their poses averaged, and for a whole cloud its mirror plane laid on the
-chosen object's.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The final pose.
+
+The chosen hypothesis refined in full on the candidates that fit it nearly as well as the best,
+their poses averaged, and for a whole cloud its mirror plane laid on the chosen object's.
 
 Each pre-aligned candidate gives its own estimate of the query's canonical pose, off by how that
 instance differs from the query; averaging the candidates that agree cancels much of that. For
@@ -11,7 +27,6 @@ centred on the candidate rather than wherever the query's points happen to touch
 from __future__ import annotations
 
 import numpy as np
-
 from pcrp_core.category.fitting import Fitter
 from pcrp_core.category.hypothesis import Hypothesis, rotation_cosine
 from pcrp_core.category.prepared import Prepared
@@ -22,16 +37,23 @@ AGREE_DEG = 15.0  # candidates' poses within this of the best one's are averaged
 
 
 def finalists(vote_chamfers: np.ndarray, ratio: float) -> np.ndarray:
-    """Indices of the candidates whose fit in the vote is within ratio of the best: only they go
-    on to the full refinement (measured: the others do not end near the best)."""
+    """
+    Return indices of the candidates whose fit in the vote is within ratio of the best.
+
+    Only they go on to the full refinement (measured: the others do not end near the best).
+    """
     return np.flatnonzero(vote_chamfers <= ratio * vote_chamfers.min())
 
 
 def resume(
     fitter: Fitter, hyp: Hypothesis, gallery: Prepared, vote: Hypothesis, vote_iterations: int
 ) -> Hypothesis:
-    """hyp fully refined on gallery. The vote already ran the first ICP iterations of that very
-    run when it used the same points, so the run resumes where the vote stopped."""
+    """
+    Return hyp fully refined on gallery.
+
+    The vote already ran the first ICP iterations of that very run when it used the same points, so
+    the run resumes where the vote stopped.
+    """
     opts = fitter.opts
     same_points = fitter.coarse_src is fitter.src
     if opts.refine and same_points and 0 < vote_iterations <= opts.icp_iterations:
@@ -50,8 +72,11 @@ def resume(
 
 
 def both_ways(fitter: Fitter, hyp: Hypothesis, gallery: Prepared) -> tuple[np.ndarray, np.ndarray]:
-    """(R, t) of hyp refined further by icp_symmetric, for a whole cloud: a one-sided view lacks
-    the far side that the gallery-to-query matches would look for."""
+    """
+    (R, t) of hyp refined further by icp_symmetric, for a whole cloud.
+
+    a one-sided view lacks the far side that the gallery-to-query matches would look for.
+    """
     opts = fitter.opts
     return icp_symmetric(
         fitter.src,
@@ -68,8 +93,11 @@ def both_ways(fitter: Fitter, hyp: Hypothesis, gallery: Prepared) -> tuple[np.nd
 
 
 def agreeing(hyps: list[Hypothesis], anchor: Hypothesis, within: float) -> list[int]:
-    """Indices of the candidates whose pose agrees with the best one's and that fit nearly as
-    well."""
+    """
+    Return indices of the candidates whose pose agrees with the best one's.
+
+    Only those that also fit nearly as well.
+    """
     cos_max = np.cos(np.radians(AGREE_DEG))
     return [
         n
@@ -79,7 +107,10 @@ def agreeing(hyps: list[Hypothesis], anchor: Hypothesis, within: float) -> list[
 
 
 def average(poses: list[tuple[np.ndarray, np.ndarray]], anchor: Hypothesis) -> Hypothesis:
-    """The (R, t) poses of candidates that agree (see agreeing) averaged, with the anchor's scores.
+    """
+    Return the (R, t) poses of candidates that agree (see agreeing) averaged.
+
+    With the anchor's scores.
 
     Equal weights: fit differences between instances that all sit well say little about whose
     frame is truer, and an exact gallery match stands alone anyway, since no relative fits
@@ -94,8 +125,11 @@ def average(poses: list[tuple[np.ndarray, np.ndarray]], anchor: Hypothesis) -> H
 
 
 def finish(fitter: Fitter, hyp: Hypothesis, gallery: Prepared) -> Hypothesis:
-    """hyp with its mirror plane laid on the gallery object's where that applies (see
-    PoseOptions.mirror_snap), scored on gallery."""
+    """
+    Return hyp with its mirror plane laid on the gallery object's, scored on gallery.
+
+    Laid where that applies (see PoseOptions.mirror_snap).
+    """
     R, t, source = hyp.R, hyp.t, hyp.source
     opts, q = fitter.opts, fitter.query
     target = None

@@ -1,20 +1,34 @@
-"""Pose of a query relative to the retrieved gallery objects: hypotheses, the vote, refinement.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Pose of a query relative to the retrieved gallery objects: hypotheses, the vote, refinement.
 
 Hypotheses (seeding.py) come from each of the first retrieved candidates; the best few distinct
-rotations go to the vote (vote.py), in which every retrieved candidate judges them; the chosen
-one is refined in full and averaged over the candidates that agree (refinement.py). When the
-caller knows which way is up, hypotheses that tip the gallery's up axis away from it are dropped
-before any of this (upright.py). All of it happens in normalised coordinates, query registered
-onto gallery: g ≈ R @ q + t.
+rotations go to the vote (vote.py), in which every retrieved candidate judges them; the chosen one
+is refined in full and averaged over the candidates that agree (refinement.py). When the caller
+knows which way is up, hypotheses that tip the gallery's up axis away from it are dropped before
+any of this (upright.py). All of it happens in normalised coordinates, query registered onto
+gallery: g ≈ R @ q + t.
 """
 
 from __future__ import annotations
 
 import numpy as np
-
 from pcrp_core.category import evidence, refinement
 from pcrp_core.category.fitting import Fitter
-from pcrp_core.category.hypothesis import Hypothesis, distinct
+from pcrp_core.category.hypothesis import distinct, Hypothesis
 from pcrp_core.category.prepared import Prepared
 from pcrp_core.category.seeding import seeds
 from pcrp_core.category.upright import UpPrior
@@ -26,8 +40,12 @@ SEEDS_PER_CANDIDATE = 2  # distinct rotations each seeding candidate hands to th
 
 
 class Effort:
-    """How much work a cloud gets at each stage: whole clouds and one-sided views have settings
-    of their own (a view's hypotheses are more often wrong, so it gets more of them)."""
+    """
+    How much work a cloud gets at each stage.
+
+    whole clouds and one-sided views have settings of their own (a view's hypotheses are more often
+    wrong, so it gets more of them).
+    """
 
     def __init__(self, opts: PoseOptions, whole: bool):
         self.seeders = opts.seeders if whole else opts.seeders_view
@@ -49,10 +67,13 @@ class Registrar:
         timings: dict | None = None,
         up=None,
     ):
-        """timings, when given, gets seconds added per stage: correspondences, ransac,
-        hypotheses (principal axes, flips, their coarse ICP), verification (the vote) and
-        refinement (final ICP, averaging, the mirror-plane finish). up: (the up direction in the
-        query's frame, the gallery's up axis), unit vectors, when the caller knows which way is up.
+        """
+        Set up the stages of registration.
+
+        timings, when given, gets seconds added per stage: correspondences, ransac, hypotheses
+        (principal axes, flips, their coarse ICP), verification (the vote) and refinement (final
+        ICP, averaging, the mirror-plane finish). up: (the up direction in the query's frame, the
+        gallery's up axis), unit vectors, when the caller knows which way is up.
         """
         self.query, self.opts, self.rng = query, opts, rng
         self.clock = Clock(timings)
@@ -72,7 +93,7 @@ class Registrar:
         return seeds(self.fitter, gallery, rank, self.up, self.rng, self.clock)
 
     def pool(self, matched: list[Prepared], verifiers: list[Prepared]) -> list[Hypothesis]:
-        """The distinct hypotheses that go to the vote, best first."""
+        """Return the distinct hypotheses that go to the vote, best first."""
         n_seed = (
             len(verifiers) if self.effort.seeders <= 0 else max(len(matched), self.effort.seeders)
         )
@@ -90,12 +111,13 @@ class Registrar:
     def best_pose(
         self, matched: list[Prepared], verifiers: list[Prepared], groups=None
     ) -> tuple[int, Hypothesis]:
-        """(index into verifiers of the best-fitting object, its refined hypothesis).
+        """
+        (index into verifiers of the best-fitting object, its refined hypothesis).
 
-        matched: the first retrieved objects, with features, that seed hypotheses;
-        verifiers: all top retrieved objects (matched first) that vote on them;
-        groups: each verifier's category, when known: only those of the best-fitting object's
-        category vote (a chair has no say on which way an airplane faces).
+        matched: the first retrieved objects, with features, that seed hypotheses; verifiers: all
+        top retrieved objects (matched first) that vote on them; groups: each verifier's category,
+        when known: only those of the best-fitting object's category vote (a chair has no say on
+        which way an airplane faces).
         """
         opts, fitter, effort = self.opts, self.fitter, self.effort
         self.clock.lap('gallery_features')  # what the caller spent preparing the candidates

@@ -1,8 +1,25 @@
-"""The hypotheses one retrieved candidate contributes, coarsely refined on it: the paper's
-RANSAC on feature matches (where the candidate has features), the directions a sensor could
-have stood in (the first view_seeders candidates, for one-sided views), principal axes, then the
-half turns of the best of those, and, when which way is up is known but nothing is upright,
-the query stood up and turned about the vertical. The generators are in pcrp_core/hypotheses.py."""
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The hypotheses one retrieved candidate contributes, coarsely refined on it.
+
+The paper's RANSAC on feature matches (where the candidate has features), the directions a sensor
+could have stood in (the first view_seeders candidates, for one-sided views), principal axes, then
+the half turns of the best of those, and, when which way is up is known but nothing is upright, the
+query stood up and turned about the vertical. The generators are in pcrp_core/hypotheses.py.
+"""
 
 from __future__ import annotations
 

@@ -1,5 +1,22 @@
-"""The candidates' vote: every hypothesis refined briefly on every retrieved candidate, and the
-rotation that sits best on all of them together chosen.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The candidates' vote.
+
+Every hypothesis refined briefly on every retrieved candidate, and the rotation that sits best on
+all of them together chosen.
 
 Because the gallery is pre-aligned, all candidates share one canonical frame, so a right
 rotation fits every candidate of the category, while a flip that happens to suit one instance
@@ -9,15 +26,16 @@ is outvoted by the others.
 from __future__ import annotations
 
 import numpy as np
-
 from pcrp_core.category.fitting import Fitter
 from pcrp_core.category.hypothesis import Hypothesis
 from pcrp_core.category.prepared import Prepared
 
 
 def vote_scores(ch: np.ndarray, voters: np.ndarray, weight: float) -> np.ndarray:
-    """(hypotheses,) the vote's score of each hypothesis, lower is better; ch: (hypotheses,
-    candidates) chamfers.
+    """
+    Return (hypotheses,) the vote's score of each hypothesis, lower is better.
+
+    ch: (hypotheses, candidates) chamfers.
 
     The best fit decides when one candidate is the very object; the median over the voting
     candidates decides between near-symmetric flips that one instance happens to suit. Both as
@@ -31,13 +49,17 @@ def vote_scores(ch: np.ndarray, voters: np.ndarray, weight: float) -> np.ndarray
 
 
 def choose(ch: np.ndarray, voters: np.ndarray, weight: float) -> int:
-    """Index of the hypothesis the candidates choose (vote_scores)."""
+    """Return the index of the hypothesis the candidates choose, by vote_scores."""
     return int(np.argmin(vote_scores(ch, voters, weight)))
 
 
 def voting_candidates(ch: np.ndarray, groups) -> np.ndarray:
-    """(candidates,) which candidates vote: with their categories known, only those of the
-    best-fitting candidate's category (a chair has no say on which way an airplane faces)."""
+    """
+    (candidates,) which candidates vote.
+
+    With their categories known, only those of the best-fitting candidate's category (a chair has
+    no say on which way an airplane faces).
+    """
     if groups is None:
         return np.ones(ch.shape[1], bool)
     return np.asarray(groups) == groups[int(np.argmin(ch.min(axis=0)))]
@@ -51,8 +73,12 @@ def vote(
     groups,
     exact_ratio: float,
 ) -> tuple[int, list[list[Hypothesis]], np.ndarray]:
-    """(index into pool of the chosen hypothesis, each candidate's refined hypotheses, their
-    (hypotheses, candidates) chamfers)."""
+    """
+    Run the vote.
+
+    Return (index into pool of the chosen hypothesis, each candidate's refined hypotheses, their
+    (hypotheses, candidates) chamfers).
+    """
     opts = fitter.opts
     Rs, ts = [h.R for h in pool], [h.t for h in pool]
     votes = [fitter.refine_many(Rs, ts, g, iterations, [''] * len(pool)) for g in verifiers]

@@ -1,21 +1,35 @@
-"""Answer every view with a model and count what a robot would care about.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-A view's answer is right when it names the right object, or an object the model records as its
-twin (the same shape within the sensor's noise: no depth camera tells them apart), and puts the
-object's surface where it is: ADD-S below 10 % of the object's diameter (for a twin, the mean
-distance from the true surface to the answer's). Since a robot acts on what it accepts, the
-summary also separates the wrong answers the model accepted (the dangerous ones: it would grasp
-air) from the right ones it rejected (the lost ones: it would ask again), and says how well the
-confidence ranks right answers above wrong ones. Errors of answers naming another object are
-not measured (their pose is of another object's frame); they count as failures in the AUC.
+"""
+Answer every view with a model and count what a robot would care about.
+
+A view's answer is right when it names the right object, or an object the model records as its twin
+(the same shape within the sensor's noise: no depth camera tells them apart), and puts the object's
+surface where it is: ADD-S below 10 % of the object's diameter (for a twin, the mean distance from
+the true surface to the answer's). Since a robot acts on what it accepts, the summary also
+separates the wrong answers the model accepted (the dangerous ones: it would grasp air) from the
+right ones it rejected (the lost ones: it would ask again), and says how well the confidence ranks
+right answers above wrong ones. Errors of answers naming another object are not measured (their
+pose is of another object's frame); they count as failures in the AUC.
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
+import time
 
 import numpy as np
-
 from pcrp_core.evaluation import metrics
 from pcrp_core.evaluation.scenes import Scene
 from pcrp_core.sources.camera import Mesh
@@ -49,8 +63,11 @@ class Truths(dict):
         return self[object_id]
 
     def surface(self, object_id: str) -> np.ndarray | None:
-        """Dense points of an object's surface, where an answer naming it puts it; None for an
-        object without a mesh here (a user's folder need not hold the whole gallery)."""
+        """
+        Dense points of an object's surface, where an answer naming it puts it.
+
+        None for an object without a mesh here (a user's folder need not hold the whole gallery).
+        """
         if object_id not in self._surfaces:
             mesh = self.meshes.get(object_id)
             self._surfaces[object_id] = None if mesh is None else mesh.sample(SURFACE_POINTS, 1)
@@ -58,14 +75,19 @@ class Truths(dict):
 
 
 def twin_pairs(model) -> frozenset:
-    """The pairs of gallery objects the model found to have one shape (model.meta['twins'])."""
+    """
+    Return the pairs of gallery objects the model found to have one shape.
+
+    They are read from model.meta['twins'].
+    """
     meta = getattr(model, 'meta', None) or {}
     return frozenset(frozenset(p) for p in meta.get('twins') or ())
 
 
 def record(scene: Scene, answer, seconds: float, truths: Truths, reason: str = '',
            twins=frozenset()) -> dict:
-    """One view's row.
+    """
+    One view's row.
 
     answer: anything with gallery_id, rotation, translation, rejected, reason and a confidence
     (or score) in [0, 1]; None when the method gave no answer (reason says why). twins: pairs
@@ -90,7 +112,9 @@ def record(scene: Scene, answer, seconds: float, truths: Truths, reason: str = '
     twin = frozenset((answer.gallery_id, scene.object_id)) in twins
     # where retrieval put the true object, to tell a retrieval miss from a wrong pick
     listed = [g for g, _ in getattr(answer, 'candidates', ())]
-    rank = (listed.index(scene.object_id) + 1 if scene.object_id in listed else 0) if listed else None
+    rank = (
+        (listed.index(scene.object_id) + 1 if scene.object_id in listed else 0) if listed else None
+    )
     confidence = getattr(answer, 'confidence', getattr(answer, 'score', 0.0))
     row.update(gallery_id=answer.gallery_id, right_object=bool(right), twin=bool(twin),
                right_or_twin=bool(right or twin), rejected=bool(answer.rejected),
@@ -114,7 +138,8 @@ def record(scene: Scene, answer, seconds: float, truths: Truths, reason: str = '
 
 def evaluate(model, scenes: list[Scene], meshes: dict[str, Mesh], use_up: bool = False,
              progress=None, truths: Truths | None = None, twins=None) -> list[dict]:
-    """Per-view records of model.estimate on every scene, as the node calls it.
+    """
+    Per-view records of model.estimate on every scene, as the node calls it.
 
     The cloud is in the camera's frame (viewpoint at the origin) and, with use_up, the table's
     normal is given as up. seconds is the wall time of the call. A cloud the model refuses
@@ -137,12 +162,15 @@ def evaluate(model, scenes: list[Scene], meshes: dict[str, Mesh], use_up: bool =
 
 
 def jsonable(x, digits: int | None = None):
-    """x with numpy scalars as Python numbers and nan/inf as None (JSON has neither), floats to
-    `digits` significant digits when given."""
+    """
+    Return x with numpy scalars as Python numbers and nan/inf as None (JSON has neither).
+
+    Floats to `digits` significant digits when given.
+    """
     if isinstance(x, np.generic):
         x = x.item()
     if isinstance(x, float):
-        return None if not np.isfinite(x) else (float(f"{x:.{digits}g}") if digits else x)
+        return None if not np.isfinite(x) else (float(f'{x:.{digits}g}') if digits else x)
     if isinstance(x, dict):
         return {k: jsonable(v, digits) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
@@ -156,10 +184,11 @@ def _median(values) -> float:
 
 
 def rejected_at(row: dict, min_confidence: float | None) -> bool:
-    """Whether the row's answer is rejected at min_confidence (None: as the method decided).
+    """
+    Whether the row's answer is rejected at min_confidence (None: as the method decided).
 
-    A view without an answer stays rejected; the model rejects exactly the answers whose
-    confidence is below min_confidence, so any threshold can be read off the records.
+    A view without an answer stays rejected; the model rejects exactly the answers whose confidence
+    is below min_confidence, so any threshold can be read off the records.
     """
     if min_confidence is None or row['gallery_id'] is None:
         return row['rejected']
@@ -167,7 +196,8 @@ def rejected_at(row: dict, min_confidence: float | None) -> bool:
 
 
 def statistics(rows: list[dict], min_confidence: float | None = None) -> dict:
-    """Figures of a set of views.
+    """
+    Figures of a set of views.
 
     Shares are of all views in rows, except right_rejected, which is of the right answers (how
     many of them a robot loses); error medians are over the views answered with the right object
@@ -250,8 +280,12 @@ def _text_table(header: list[str], rows: list[list[str]]) -> str:
 
 
 def format_summary(summary: dict) -> str:
-    """The summary as plain text: accuracy, then confidence and time, one row per family and
-    one for all views; then the mean seconds per stage."""
+    """
+    Return the summary as plain text.
+
+    Accuracy, then confidence and time, one row per family and one for all views; then the mean
+    seconds per stage.
+    """
     rows = [(f, s) for f, s in summary['families'].items()
             if f != 'all' or len(summary['families']) > 1]
     rows.append(('overall', summary['overall']))

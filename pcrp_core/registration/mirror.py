@@ -1,4 +1,19 @@
-"""Mirror planes: finish a whole object's pose by laying its mirror plane on its gallery object's.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Mirror planes: finish a whole object's pose by laying its mirror plane on its gallery object's.
 
 Most man-made objects are mirror-symmetric (the left and right of a chair, a car, an
 airplane), and a pre-aligned gallery puts that plane on a coordinate plane. ICP between two
@@ -12,10 +27,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
-from scipy.spatial.transform import Rotation
-
+from pcrp_core.geometry import rotation_taking
 from pcrp_core.registration.icp import icp
+from scipy.spatial import cKDTree
 
 # the share of points whose mirror images are scored and matched: a few parts of a symmetric
 # object are not (a door handle on one side), and sampling leaves some images in gaps
@@ -24,9 +38,13 @@ TRIM = 0.9
 
 @dataclass
 class MirrorPlane:
-    """The plane {x : normal . x = offset}; rms: how far the mirrored points land from the cloud
-    (trimmed root mean square); residual: the same in units of the cloud's point spacing (about 1
-    for a mirror-symmetric cloud)."""
+    """
+    A mirror plane {x : normal . x = offset}, with its fit.
+
+    rms: how far the mirrored points land from the cloud (trimmed root mean square); residual: the
+    same in units of the cloud's point spacing (about 1 for a mirror-symmetric cloud).
+    """
+
     normal: np.ndarray
     offset: float
     residual: float
@@ -44,11 +62,15 @@ def trimmed_rms(dist: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.partition(dist, k - 1)[:k] ** 2)))
 
 
-def mirror_plane(points: np.ndarray, tree: cKDTree, near: np.ndarray, iterations: int = 30) -> MirrorPlane:
-    """The mirror plane of a cloud found from the plane through its centroid normal to near.
+def mirror_plane(
+    points: np.ndarray, tree: cKDTree, near: np.ndarray, iterations: int = 30
+) -> MirrorPlane:
+    """
+    Return the mirror plane of a cloud found from the plane through its centroid normal to near.
 
     The cloud's mirror image in that plane is registered onto the cloud by ICP; the registered
-    reflection x -> L x + b is then a reflection in the true plane, L = I - 2 n n^T, b = 2 d n."""
+    reflection x -> L x + b is then a reflection in the true plane, L = I - 2 n n^T, b = 2 d n.
+    """
     near = np.asarray(near, dtype=np.float64) / np.linalg.norm(near)
     centre = points.mean(axis=0)
     M = np.eye(3) - 2 * np.outer(near, near)
@@ -64,13 +86,19 @@ def mirror_plane(points: np.ndarray, tree: cKDTree, near: np.ndarray, iterations
     return MirrorPlane(normal, float(normal @ b) / 2, rms / spacing(points, tree), rms)
 
 
-def gallery_mirror(points: np.ndarray, tree: cKDTree, tolerance: float, max_deg: float) -> MirrorPlane | None:
-    """A pre-aligned gallery object's mirror plane, or None when it has none near a coordinate plane.
+def gallery_mirror(
+    points: np.ndarray, tree: cKDTree, tolerance: float, max_deg: float
+) -> MirrorPlane | None:
+    """
+    Return a pre-aligned gallery object's mirror plane.
+
+    Or None when it has none near a coordinate plane.
 
     The coordinate plane through the centroid whose mirror images land closest is refined, since
     objects are aligned by hand and sampled unevenly: it must stay within max_deg of that plane
     and its images land within tolerance point spacings (mirror-symmetric ModelNet40 objects:
-    0.9-1.05; other axes of the same objects: 1.15 and up)."""
+    0.9-1.05; other axes of the same objects: 1.15 and up).
+    """
     centre, gap = points.mean(axis=0), spacing(points, tree)
     residuals = []
     for axis in range(3):
@@ -79,18 +107,24 @@ def gallery_mirror(points: np.ndarray, tree: cKDTree, tolerance: float, max_deg:
         residuals.append(trimmed_rms(tree.query(mirrored)[0]) / gap)
     axis = int(np.argmin(residuals))
     plane = mirror_plane(points, tree, np.eye(3)[axis])
-    if plane.residual >= tolerance or np.degrees(np.arccos(min(1.0, plane.normal[axis]))) > max_deg:
+    if (
+        plane.residual >= tolerance
+        or np.degrees(np.arccos(min(1.0, plane.normal[axis]))) > max_deg
+    ):
         return None
     return plane
 
 
 def snap(R: np.ndarray, t: np.ndarray, plane: MirrorPlane, target: MirrorPlane,
          query_centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Pose (R, t), mapping the query into the gallery's frame (x_g = R x_q + t), turned the least
-    so that the query's mirror plane (in the query's frame) becomes the gallery's (target): a
-    turn about the query's centroid, then a shift along the plane's normal."""
+    """
+    Pose (R, t), mapping the query into the gallery's frame (x_g = R x_q + t).
+
+    Turned the least so that the query's mirror plane (in the query's frame) becomes the gallery's
+    (target): a turn about the query's centroid, then a shift along the plane's normal.
+    """
     # the shortest turn between two single vectors (as hypotheses.py aligns up axes)
-    C = Rotation.align_vectors([target.normal], [R @ plane.normal])[0].as_matrix()
+    C = rotation_taking(R @ plane.normal, target.normal)
     c = R @ query_centre + t
     R2, t2 = C @ R, C @ (t - c) + c
     on_plane = R2 @ (plane.offset * plane.normal) + t2
@@ -98,15 +132,22 @@ def snap(R: np.ndarray, t: np.ndarray, plane: MirrorPlane, target: MirrorPlane,
 
 
 def plane_row(plane: MirrorPlane | None) -> np.ndarray:
-    """(normal, offset) of a gallery object's plane as 4 numbers, NaN where it has none: what a
-    model stores so that no query waits for the plane of an object it retrieves."""
+    """
+    Return (normal, offset) of a gallery object's plane as 4 numbers, NaN where it has none.
+
+    What a model stores so that no query waits for the plane of an object it retrieves.
+    """
     if plane is None:
         return np.full(4, np.nan)
     return np.append(plane.normal, plane.offset)
 
 
 def plane_from_row(row: np.ndarray) -> MirrorPlane | None:
-    """The stored plane of plane_row(); its residual and rms are not kept (no use reads them)."""
+    """
+    Return the stored plane of plane_row().
+
+    Its residual and rms are not kept (no use reads them).
+    """
     row = np.asarray(row, dtype=np.float64)
     if not np.isfinite(row).all():
         return None

@@ -1,3 +1,17 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Least-squares rigid motion between matched point sets (Kabsch), one or many at once."""
 from __future__ import annotations
 
@@ -5,10 +19,12 @@ import numpy as np
 
 
 def procrustes_batch(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """R (B, 3, 3), t (B, 3) minimising |R @ src + t - dst| for each batch of matches (B, n, 3).
+    """
+    R (B, 3, 3), t (B, 3) minimising |R @ src + t - dst| for each batch of matches (B, n, 3).
 
-    Means and cross-covariances are matrix products, not reductions over the middle axis:
-    numpy reduces (B, n, 3) along n several times slower than it multiplies."""
+    Means and cross-covariances are matrix products, not reductions over the middle axis: numpy
+    reduces (B, n, 3) along n several times slower than it multiplies.
+    """
     n = src.shape[1]
     w = np.full(n, 1.0 / n)
     mu_s, mu_d = w @ src, w @ dst
@@ -22,10 +38,12 @@ def procrustes_batch(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def procrustes(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """R (3, 3), t (3,) minimising |R @ src + t - dst| over matched rows of (n, 3) arrays.
+    """
+    R (3, 3), t (3,) minimising |R @ src + t - dst| over matched rows of (n, 3) arrays.
 
-    Written out rather than calling the batch form: for one set of matches (the single-pose
-    icp(), RANSAC's refit) the batch bookkeeping would cost more than the SVD."""
+    Written out rather than calling the batch form: for one set of matches (the single-pose icp(),
+    RANSAC's refit) the batch bookkeeping would cost more than the SVD.
+    """
     mu_s = src.mean(axis=0)
     mu_d = dst.mean(axis=0)
     U, _, Vt = np.linalg.svd((src - mu_s).T @ (dst - mu_d))

@@ -1,11 +1,24 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The category-level path's confidence: learnt at build, stored, and what it says."""
 
-import numpy as np
-import pytest
-
 from helpers import MODELNET, modelnet, random_pose
+import numpy as np
 from pcrp_core import PCRP
 from pcrp_core.category.evidence import FEATURES
+import pytest
 
 
 def test_search_leaves_out_the_objects_it_is_told_to(small_model):
@@ -38,8 +51,12 @@ def test_the_build_learns_a_confidence_that_is_stored_and_answers_report(small_m
 
 @pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
 def test_objects_of_categories_outside_the_gallery_are_less_trusted_than_its_own(small_model):
-    """The gallery holds chairs, sofas and airplanes: its own objects (as a robot that knows
-    them would see them) must come back more confident than lamps and bottles it never held."""
+    """
+    The gallery holds chairs, sofas and airplanes.
+
+    Its own objects (as a robot that knows them would see them) must come back more confident than
+    lamps and bottles it never held.
+    """
     model = PCRP.load(small_model)
     rng = np.random.default_rng(11)
     own, outside = [], []

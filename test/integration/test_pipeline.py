@@ -1,15 +1,28 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """End to end on real ModelNet40 objects: retrieval, pose, rejection of unusable input."""
 import copy
 import dataclasses
 
+from helpers import modelnet, random_pose, rotation_error_deg
 import numpy as np
+from pcrp_core import InvalidCloud, PCRP
 import pytest
 
-from helpers import modelnet, random_pose, rotation_error_deg
-from pcrp_core import InvalidCloud, PCRP
 
-
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def model(small_model):
     return PCRP.load(small_model)
 
@@ -25,12 +38,12 @@ def test_gallery_objects_in_random_poses_come_back_exactly(model):
         np.testing.assert_allclose(r.translation, t, atol=0.01)
         np.testing.assert_allclose(r.transform[:3, :3], R, atol=0.02)
         assert r.score > 0.9 and r.scale == 1.0
-        assert set(r.timings) >= {"features", "retrieval", "registration", "total"}
+        assert set(r.timings) >= {'features', 'retrieval', 'registration', 'total'}
 
 
-@pytest.mark.parametrize("category", ["chair", "sofa"])
+@pytest.mark.parametrize('category', ['chair', 'sofa'])
 def test_held_back_objects_get_their_category_and_pose(model, category):
-    points, _ = modelnet(category, "test", 12)
+    points, _ = modelnet(category, 'test', 12)
     rng = np.random.default_rng(5)
     errors, right = [], []
     for p in points:
@@ -46,7 +59,7 @@ def test_held_back_objects_get_their_category_and_pose(model, category):
 
 
 def test_same_object_under_two_rotations_gives_the_same_canonical_pose(model):
-    p = modelnet("chair", "test", 1, start=4)[0][0]
+    p = modelnet('chair', 'test', 1, start=4)[0][0]
     rng = np.random.default_rng(8)
     poses = []
     for _ in range(2):
@@ -58,19 +71,27 @@ def test_same_object_under_two_rotations_gives_the_same_canonical_pose(model):
 
 
 def _mirror_snap(model, on: bool):
-    """The model with the mirror-plane finish on or off; shares the gallery and its cache."""
+    """
+    Return the model with the mirror-plane finish on or off.
+
+    Shares the gallery and its cache.
+    """
     m = copy.copy(model)
     m.pose_options = dataclasses.replace(model.pose_options, mirror_snap=on)
     return m
 
 
 def test_mirror_planes_tighten_the_poses_of_mirror_symmetric_objects(model):
-    """Held-back airplanes and chairs, whole, in random poses: laying each query's mirror plane on
-    its gallery object's (registration/mirror.py) must bring the poses ICP aligns closer still."""
+    """
+    Held-back airplanes and chairs, whole, in random poses.
+
+    Laying each query's mirror plane on its gallery object's (registration/mirror.py) must bring
+    the poses ICP aligns closer still.
+    """
     rng = np.random.default_rng(11)
     queries = []
-    for category in ("airplane", "chair"):
-        for p in modelnet(category, "test", 10)[0]:
+    for category in ('airplane', 'chair'):
+        for p in modelnet(category, 'test', 10)[0]:
             R, t = random_pose(rng)
             queries.append((p @ R.T + t, R))
     errors = {snap: np.array([rotation_error_deg(_mirror_snap(model, snap).estimate(q).rotation, R)
@@ -84,28 +105,38 @@ def test_mirror_planes_tighten_the_poses_of_mirror_symmetric_objects(model):
 
 
 def test_mirror_planes_leave_known_objects_to_their_own_fit(model):
-    """A gallery object re-measured (noise of 1 % of its size) fits its own gallery copy more
-    tightly than its mirror image: that registration is the more precise one and must stand.
-    (Snapped regardless, such poses lost about 0.1 degree on ModelNet40's known objects.)"""
+    """
+    A gallery object re-measured fits its own gallery copy more tightly than its mirror image.
+
+    Re-measured: noise of 1 % of its size. That registration is the more precise one and must
+    stand. (Snapped regardless, such poses lost about 0.1 degree on ModelNet40's known objects.)
+    """
     rng = np.random.default_rng(12)
     for gid in model.gallery_ids[3::15]:
         p = model.gallery_cloud(gid).astype(np.float64)
         R, t = random_pose(rng)
-        q = (p + rng.normal(scale=0.01 * np.linalg.norm(p - p.mean(0), axis=1).max(), size=p.shape)) @ R.T + t
+        q = (
+            p + rng.normal(scale=0.01 * np.linalg.norm(p - p.mean(0), axis=1).max(), size=p.shape)
+        ) @ R.T + t
         poses = [_mirror_snap(model, snap).estimate(q).rotation for snap in (False, True)]
         np.testing.assert_allclose(poses[1], poses[0], atol=1e-9)
 
 
-@pytest.mark.parametrize("category", ["chair", "sofa"])
-def test_objects_modelled_outside_modelnet_get_their_category_and_one_canonical_pose(model, category):
-    """The procedural generator's chairs and sofas (made here, not drawn from ModelNet) against the
-    ModelNet gallery, each under two random rotations."""
+@pytest.mark.parametrize('category', ['chair', 'sofa'])
+def test_objects_modelled_outside_modelnet_get_their_category_and_one_canonical_pose(
+    model, category
+):
+    """
+    The procedural generator's chairs and sofas against the ModelNet gallery.
+
+    They are made here, not drawn from ModelNet, each under two random rotations.
+    """
     from pcrp_core.sources.procedural import generate_object
     rng = np.random.default_rng(2)
     right, disagreement = [], []
     for seed in range(100, 108):
         p = generate_object(category, seed).astype(np.float64)
-        p = p / np.linalg.norm(p - p.mean(0), axis=1).max()        # the gallery's units: the unit sphere
+        p = p / np.linalg.norm(p - p.mean(0), axis=1).max()  # the gallery's units: the unit sphere
         poses = []
         for _ in range(2):
             R, t = random_pose(rng)
@@ -134,31 +165,45 @@ def test_large_clouds_are_downsampled_and_answered(model):
 
 
 def test_a_gallery_object_seen_by_a_sensor_is_not_outvoted_by_relatives_facing_otherwise():
-    """Like ModelNet's cars, some of which face along x and others along y: nine relatives turned
-    a quarter turn about the vertical must not vote a cloud of the very object (here the whole
-    of it, from a sensor at the origin, as the node takes clouds by default) into their frame.
-    Checked to fail with exact_ratio_view=0: every trial then came back as a relative, 90 deg off."""
-    from scipy.spatial.transform import Rotation
+    """
+    Like ModelNet's cars, some of which face along x and others along y.
+
+    Nine relatives turned a quarter turn about the vertical must not vote a cloud of the very
+    object (here the whole of it, from a sensor at the origin, as the node takes clouds by default)
+    into their frame. Checked to fail with exact_ratio_view=0: every trial then came back as a
+    relative, 90 deg off.
+    """
     from pcrp_core.sources import GalleryObject
     from pcrp_core.sources.procedural import generate_object
-    quarter = Rotation.from_euler("z", 90, degrees=True).as_matrix()
-    model = PCRP.build([GalleryObject(f"car_{k}", "car", generate_object("car", k) @ (quarter.T if k else np.eye(3)))
-                        for k in range(10)], n_jobs=1)
+    from scipy.spatial.transform import Rotation
+    quarter = Rotation.from_euler('z', 90, degrees=True).as_matrix()
+    model = PCRP.build(
+        [
+            GalleryObject(
+                f'car_{k}', 'car', generate_object('car', k) @ (quarter.T if k else np.eye(3))
+            )
+            for k in range(10)
+        ],
+        n_jobs=1,
+    )
     rng = np.random.default_rng(3)
-    p = generate_object("car", 0).astype(np.float64)
+    p = generate_object('car', 0).astype(np.float64)
     for _ in range(4):
         R, _ = random_pose(rng)
-        r = model.estimate(p @ R.T + [0.0, 0.0, 3.0] + rng.normal(scale=0.003, size=p.shape), viewpoint=np.zeros(3))
-        assert r.gallery_id == "car_0" and rotation_error_deg(r.rotation, R) < 2.0
+        r = model.estimate(
+            p @ R.T + [0.0, 0.0, 3.0] + rng.normal(scale=0.003, size=p.shape),
+            viewpoint=np.zeros(3),
+        )
+        assert r.gallery_id == 'car_0' and rotation_error_deg(r.rotation, R) < 2.0
 
 
-@pytest.mark.parametrize("cloud, reason", [
-    (np.zeros((0, 3)), "empty"),
-    (np.full((100, 3), np.nan), "no_finite_points"),
-    (np.random.default_rng(0).normal(size=(10, 3)), "too_few_points"),
-    (np.ones((500, 3)), "too_few_points"),
-    (np.outer(np.linspace(0, 1, 500), [1.0, 2.0, 3.0]), "degenerate"),
-    (np.zeros((10, 2)), "bad_shape"),
+@pytest.mark.parametrize('cloud, reason', [
+    (np.zeros((0, 3)), 'empty'),
+    (np.full((100, 3), np.nan), 'no_finite_points'),
+    (np.random.default_rng(0).normal(size=(10, 3)), 'too_few_points'),
+    (np.ones((500, 3)), 'too_few_points'),
+    (np.outer(np.linspace(0, 1, 500), [1.0, 2.0, 3.0]), 'degenerate'),
+    (np.zeros((10, 2)), 'bad_shape'),
 ])
 def test_unusable_clouds_raise_with_a_reason(model, cloud, reason):
     with pytest.raises(InvalidCloud) as err:
@@ -168,18 +213,18 @@ def test_unusable_clouds_raise_with_a_reason(model, cloud, reason):
 
 def test_settings_are_validated_and_an_invalid_change_changes_nothing(model):
     before = model.get_params()
-    with pytest.raises(ValueError, match="n_candidates"):
+    with pytest.raises(ValueError, match='n_candidates'):
         model.set_params(n_candidates=0)
-    with pytest.raises(ValueError, match="unknown setting colour"):
-        model.set_params(colour="red")
-    with pytest.raises(ValueError, match="min_points must not exceed"):
+    with pytest.raises(ValueError, match='unknown setting colour'):
+        model.set_params(colour='red')
+    with pytest.raises(ValueError, match='min_points must not exceed'):
         model.set_params(min_points=5000)
-    with pytest.raises(ValueError, match="up_tolerance_deg"):
+    with pytest.raises(ValueError, match='up_tolerance_deg'):
         model.set_params(n_candidates=4, up_tolerance_deg=0.0)
     assert model.get_params() == before
     variant = model.with_options(min_confidence=0.3, refine=False)
     assert (variant.options.min_confidence, variant.pose_options.refine) == (0.3, False)
     assert model.get_params() == before and variant.gallery is model.gallery
-    with pytest.warns(DeprecationWarning, match="min_confidence"):
+    with pytest.warns(DeprecationWarning, match='min_confidence'):
         variant = model.with_options(min_score=0.25)
     assert variant.options.min_confidence == 0.25

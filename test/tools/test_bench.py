@@ -1,33 +1,63 @@
-"""The benchmark report says why a target is missed from its own run's figures, not from
-numbers written into its prose."""
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The benchmark report says why a target is missed from its own run's figures.
+
+Not from numbers written into its prose.
+"""
+
 from tools.bench import TARGETS, why_unmet
 
 
 def _run(eight_under_5, eight_mean):
     def method(ms, under_5, mean):
-        return {"median_ms": ms, "p95_ms": ms, "under_5": under_5, "under_10": under_5, "err_mean": mean,
-                "err_median": 2.0}
-    stages = {"registration": {"median_ms": 311, "p95_ms": 350}, "total": {"median_ms": 337, "p95_ms": 390}}
-    methods = {"pcrp": method(337, 0.63, 36.4), "pcrp_8_candidates": method(219, eight_under_5, eight_mean),
-               "pcrp_paper": method(41, 0.27, 71.2)}
-    return {"queries": [{"threads": "1", "n_points": 1024, "stages": stages, "methods": methods}],
-            "verdicts": {TARGETS[0][0]: ("337 ms", False)}}
+        return {
+            'median_ms': ms,
+            'p95_ms': ms,
+            'under_5': under_5,
+            'under_10': under_5,
+            'err_mean': mean,
+            'err_median': 2.0,
+        }
+    stages = {
+        'registration': {'median_ms': 311, 'p95_ms': 350},
+        'total': {'median_ms': 337, 'p95_ms': 390},
+    }
+    methods = {
+        'pcrp': method(337, 0.63, 36.4),
+        'pcrp_8_candidates': method(219, eight_under_5, eight_mean),
+        'pcrp_paper': method(41, 0.27, 71.2),
+    }
+    return {'queries': [{'threads': '1', 'n_points': 1024, 'stages': stages, 'methods': methods}],
+            'verdicts': {TARGETS[0][0]: ('337 ms', False)}}
 
 
 def test_reasons_quote_this_runs_figures():
-    text = " ".join(why_unmet(_run(0.52, 44.9)))
-    for figure in ("311 of its 337 ms", "41 ms", "27%", "63%", "219 ms", "52%", "44.9°", "36.4°"):
+    text = ' '.join(why_unmet(_run(0.52, 44.9)))
+    for figure in ('311 of its 337 ms', '41 ms', '27%', '63%', '219 ms', '52%', '44.9°', '36.4°'):
         assert figure in text
-    assert "the defaults stay" in text
+    assert 'the defaults stay' in text
 
 
 def test_reasons_do_not_defend_a_default_the_run_contradicts():
-    text = " ".join(why_unmet(_run(0.64, 30.0)))
-    assert "the defaults stay" not in text
-    assert "worth revisiting" in text
+    text = ' '.join(why_unmet(_run(0.64, 30.0)))
+    assert 'the defaults stay' not in text
+    assert 'worth revisiting' in text
 
 
 def test_no_reason_for_a_met_target():
     run = _run(0.52, 44.9)
-    run["verdicts"][TARGETS[0][0]] = ("90 ms", True)
+    run['verdicts'][TARGETS[0][0]] = ('90 ms', True)
     assert why_unmet(run) == []

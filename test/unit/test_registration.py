@@ -1,13 +1,31 @@
-"""Registration stages on known transforms: Procrustes, RANSAC, ICP, symmetry split, mirror planes."""
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Registration stages on known transforms.
+
+Procrustes, RANSAC, ICP, symmetry split, mirror planes.
+"""
+from helpers import MODELNET, modelnet, random_pose, rotation_error_deg
 import numpy as np
+from pcrp_core.category.vote import choose
+from pcrp_core.registration import (fit_quality, icp, icp_symmetric, procrustes, procrustes_batch,
+                                    ransac)
+from pcrp_core.registration.mirror import gallery_mirror, mirror_plane, MirrorPlane, snap
+from pcrp_core.symmetry import split_halves, symmetry_axis
 import pytest
 from scipy.spatial import cKDTree
-
-from helpers import MODELNET, modelnet, random_pose, rotation_error_deg
-from pcrp_core.category.vote import choose
-from pcrp_core.registration import fit_quality, icp, icp_symmetric, procrustes, procrustes_batch, ransac
-from pcrp_core.registration.mirror import MirrorPlane, gallery_mirror, mirror_plane, snap
-from pcrp_core.symmetry import split_halves, symmetry_axis
 
 
 def test_procrustes_recovers_a_known_rigid_motion():
@@ -50,9 +68,9 @@ def test_ransac_ignores_forty_percent_wrong_matches():
     assert inliers.sum() >= 120 and not inliers[wrong].any()
 
 
-@pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")
+@pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
 def test_icp_converges_from_a_nearby_pose_and_scores_the_fit():
-    p = modelnet("chair", count=1)[0][0]
+    p = modelnet('chair', count=1)[0][0]
     rng = np.random.default_rng(4)
     from scipy.spatial.transform import Rotation
     R_small = Rotation.from_rotvec(np.radians(12) * np.array([0.6, 0.0, 0.8])).as_matrix()
@@ -68,8 +86,15 @@ def test_icp_converges_from_a_nearby_pose_and_scores_the_fit():
 
 def test_symmetry_split_finds_the_mirror_axis_and_halves_it():
     rng = np.random.default_rng(5)
-    # a mirror-symmetric shape across x (an L-shape bent in y, z, mirrored in x), arbitrarily rotated
-    half = np.column_stack([rng.uniform(0.1, 1, 500), rng.uniform(-2, 2, 500) ** 3 / 4, rng.uniform(-0.5, 1.5, 500) ** 2])
+    # a mirror-symmetric shape across x (an L-shape bent in y, z, mirrored in x), arbitrarily
+    # rotated
+    half = np.column_stack(
+        [
+            rng.uniform(0.1, 1, 500),
+            rng.uniform(-2, 2, 500) ** 3 / 4,
+            rng.uniform(-0.5, 1.5, 500) ** 2,
+        ]
+    )
     shape = np.concatenate([half, half * [-1, 1, 1]])
     R, _ = random_pose(rng)
     axis = symmetry_axis(shape @ R.T)
@@ -80,7 +105,7 @@ def test_symmetry_split_finds_the_mirror_axis_and_halves_it():
 
 
 def _box_surface(rng, size, n):
-    """n points uniformly on the surface of an axis-aligned box centred at the origin."""
+    """Return n points uniformly on the surface of an axis-aligned box centred at the origin."""
     size = np.asarray(size, float)
     areas = np.array([size[1] * size[2], size[0] * size[2], size[0] * size[1]])
     axis = rng.choice(3, n, p=areas / areas.sum())
@@ -98,14 +123,16 @@ def test_symmetric_icp_centres_a_shorter_instance_where_one_way_icp_lets_it_slid
     tree = cKDTree(gallery)
     start = np.array([0.3, 0.0, 0.0])
     _, t_one = icp(query, gallery, tree, np.eye(3), start, iterations=50, trim=0.8)
-    R_sym, t_sym = icp_symmetric(query, gallery, tree, np.eye(3), start, iterations=200, trim=0.8, reverse_trim=1.0)
+    R_sym, t_sym = icp_symmetric(
+        query, gallery, tree, np.eye(3), start, iterations=200, trim=0.8, reverse_trim=1.0
+    )
     assert abs(t_one[0]) > 0.2
     assert abs(t_sym[0]) < 0.05 and rotation_error_deg(R_sym, np.eye(3)) < 1.0
 
 
-@pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")
+@pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
 def test_symmetric_icp_recovers_a_known_pose_of_the_same_object():
-    p = modelnet("sofa", count=1)[0][0]
+    p = modelnet('sofa', count=1)[0][0]
     rng = np.random.default_rng(7)
     from scipy.spatial.transform import Rotation
     R_small = Rotation.from_rotvec(np.radians(10) * np.array([0.0, 0.6, 0.8])).as_matrix()
@@ -114,25 +141,31 @@ def test_symmetric_icp_recovers_a_known_pose_of_the_same_object():
     assert rotation_error_deg(R, np.eye(3)) < 1.0 and np.linalg.norm(t) < 0.01
 
 
-@pytest.mark.skipif(not MODELNET.exists(), reason="needs ../shared/data/modelnet40")
+@pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
 def test_view_hypotheses_find_a_one_sided_view_where_principal_axes_do_not():
-    """A depth camera's view of a chair in a random pose: placing the known sensor around the
-    object must put one of the two best guesses near the truth (ICP takes it from there) in most
-    trials. Principal axes, the other cheap guess, manage 6 of these 20 (half a chair has other
-    axes); a wrong viewing direction or placement brings the view guesses down to that."""
+    """
+    A depth camera's view of a chair in a random pose.
+
+    Placing the known sensor around the object must put one of the two best guesses near the truth
+    (ICP takes it from there) in most trials. Principal axes, the other cheap guess, manage 6 of
+    these 20 (half a chair has other axes); a wrong viewing direction or placement brings the view
+    guesses down to that.
+    """
     from pcrp_core import hypotheses
     from pcrp_core.sources.views import partial_view
     rng = np.random.default_rng(0)
     near_view = near_axes = 0
-    for p in modelnet("chair", "test", 20)[0]:
+    for p in modelnet('chair', 'test', 20)[0]:
         g = (p - p.mean(0)) / np.linalg.norm(p - p.mean(0), axis=1).max()
         seen, camera = partial_view(g, rng, 0.005, with_camera=True)
         R, t = random_pose(rng)
         q, viewpoint = seen @ R.T + t, R @ camera + t
         src = q[rng.choice(len(q), min(256, len(q)), replace=False)]
-        guesses = hypotheses.view_seeds(q, viewpoint, g, cKDTree(g), src, cKDTree(src), 20, 12, 2, 32)
+        guesses = hypotheses.view_seeds(
+            q, viewpoint, g, cKDTree(g), src, cKDTree(src), 20, 12, 2, 32
+        )
         axes = hypotheses.pca_seeds(q, g, src, cKDTree(g), 4, 64)
-        assert len(guesses) == 2 and all(s == "view" for _, _, s in guesses)
+        assert len(guesses) == 2 and all(s == 'view' for _, _, s in guesses)
         near_view += min(rotation_error_deg(Rg.T, R) for Rg, _, _ in guesses) < 35
         near_axes += min(rotation_error_deg(Rg.T, R) for Rg, _, _ in axes) < 35
     assert near_view >= 12 and near_view >= near_axes + 5
@@ -160,13 +193,15 @@ def test_vote_is_not_swayed_by_how_far_a_relative_is_from_the_query():
 
 def _turn(axis, deg):
     from scipy.spatial.transform import Rotation
-    return Rotation.from_rotvec(np.radians(deg) * np.asarray(axis, dtype=float) / np.linalg.norm(axis)).as_matrix()
+    return Rotation.from_rotvec(
+        np.radians(deg) * np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    ).as_matrix()
 
 
 def test_mirror_plane_is_found_from_a_guess_four_degrees_off():
     # a generated chair is mirror-symmetric about x = 0, its two sides sampled independently
     from pcrp_core.sources.procedural import generate_object
-    chair = generate_object("chair", 0).astype(np.float64)
+    chair = generate_object('chair', 0).astype(np.float64)
     chair -= [chair[:, 0].mean(), 0.0, 0.0]
     rng = np.random.default_rng(2)
     for _ in range(3):
@@ -183,7 +218,7 @@ def test_mirror_plane_is_found_from_a_guess_four_degrees_off():
 
 def test_gallery_mirror_wants_a_mirror_plane_near_a_coordinate_plane():
     from pcrp_core.sources.procedural import generate_object
-    chair = generate_object("chair", 0).astype(np.float64)
+    chair = generate_object('chair', 0).astype(np.float64)
     found = gallery_mirror(chair, cKDTree(chair), 1.1, 5.0)
     assert found is not None and found.normal[0] > np.cos(np.radians(0.5))
     tilted = chair @ _turn([0, 0, 1], 2.0).T
@@ -194,7 +229,9 @@ def test_gallery_mirror_wants_a_mirror_plane_near_a_coordinate_plane():
     # no longer symmetric: a shelf beside one side of the seat (its best plane stays within
     # a degree of x = 0, but 13 % of the points have no mirror image)
     rng = np.random.default_rng(0)
-    shelf = np.c_[rng.uniform(0.2, 0.45, 150), rng.uniform(-0.3, 0.3, 150), rng.uniform(0.0, 0.1, 150)]
+    shelf = np.c_[
+        rng.uniform(0.2, 0.45, 150), rng.uniform(-0.3, 0.3, 150), rng.uniform(0.0, 0.1, 150)
+    ]
     lopsided = np.vstack([chair, shelf])
     assert gallery_mirror(lopsided, cKDTree(lopsided), 1.1, 5.0) is None
     # nor with one front corner gone

@@ -1,6 +1,23 @@
-"""How far the category-level path's confidence can be trusted: the share of right answers it
-accepts at the default min_confidence, the share of objects from categories the gallery lacks it
-rejects, and how well it ranks the two (ROC), whole clouds and one-sided views apart.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+How far the category-level path's confidence can be trusted.
+
+The share of right answers it accepts at the default min_confidence, the share of objects from
+categories the gallery lacks it rejects, and how well it ranks the two (ROC), whole clouds and
+one-sided views apart.
 
 The gallery is the four-category model; its confidence was learnt at build on its own train
 objects (category/calibration.py). The queries are test objects: of its categories, and of
@@ -10,7 +27,6 @@ twelve categories it does not hold and no choice was made on (OUTSIDE).
 from __future__ import annotations
 
 import numpy as np
-
 from pcrp_core.category.evidence import RIGHT_DEG
 from pcrp_core.confidence import expected_calibration_error, reliability
 from tools.paper_eval.metrics import geodesic_deg
@@ -51,8 +67,12 @@ def answer_one(state: dict, q) -> dict:
 
 
 def summarise(rows: list[dict], threshold: float) -> dict:
-    """Per kind of cloud (and both): the targets' figures, the ROC curve of right answers against
-    objects from outside the gallery, and a reliability table over all answers."""
+    """
+    Per kind of cloud (and both).
+
+    The targets' figures, the ROC curve of right answers against objects from outside the gallery,
+    and a reliability table over all answers.
+    """
     from sklearn.metrics import roc_auc_score, roc_curve
 
     out = {}

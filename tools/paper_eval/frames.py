@@ -1,5 +1,21 @@
-"""How consistently a category's objects share one canonical frame: the bound the data itself sets
-on pose error.
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+How consistently a category's objects share one canonical frame.
+
+The bound the data itself sets on pose error.
 
 A gallery-based method answers in the gallery's frame. When the objects of one category disagree
 about which way is front (in this copy of ModelNet40 some cars and airplanes face along x, others
@@ -10,21 +26,21 @@ whether that best rotation is the identity: an upper bound, measured without any
 own machinery, on how many queries a method that retrieves the nearest look-alike and registers it
 perfectly can get right.
 
-A second check needs no shape matching at all: which horizontal axis (z is up) an object's long side
-lies along. For a category whose long side is always the same part (a car's length, a sofa's width),
-objects lying both ways are labels turned by a quarter turn against each other.
+A second check needs no shape matching at all: which horizontal axis (z is up) an object's long
+side lies along. For a category whose long side is always the same part (a car's length, a sofa's
+width), objects lying both ways are labels turned by a quarter turn against each other.
 """
+
 from __future__ import annotations
 
 import numpy as np
+from pcrp_core.hypotheses import AXIS_ROTATIONS
 from scipy.spatial import cKDTree
-
 from tools.paper_eval.metrics import geodesic_deg
 from tools.paper_eval.protocol import load_split
-from pcrp_core.hypotheses import AXIS_ROTATIONS
 
-ELONGATED = 1.5                 # long side / short side: which side is longer is then the object's, not noise
-POINTS = 128                    # per cloud: enough to tell a quarter or half turn of an object apart
+ELONGATED = 1.5  # long side / short side: which side is longer is then the object's, not noise
+POINTS = 128  # per cloud: enough to tell a quarter or half turn of an object apart
 IDENTITY = int(np.flatnonzero([np.allclose(M, np.eye(3)) for M in AXIS_ROTATIONS])[0])
 _GALLERIES: dict = {}
 
@@ -35,10 +51,14 @@ def _subsample(points: np.ndarray, seed: int) -> np.ndarray:
 
 
 def _gallery(data, category: str, exclude=()):
-    """(train clouds subsampled, their trees), but those named in exclude, once per process and category."""
+    """
+    (train clouds subsampled, their trees).
+
+    But those named in exclude, once per process and category.
+    """
     key = (category, tuple(exclude))
     if key not in _GALLERIES:
-        names, pts = load_split(data, category, "train")
+        names, pts = load_split(data, category, 'train')
         skip = set(exclude)
         clouds = [_subsample(p, i) for i, (n, p) in enumerate(zip(names, pts)) if n not in skip]
         _GALLERIES[key] = (np.stack(clouds), [cKDTree(c) for c in clouds])
@@ -46,32 +66,42 @@ def _gallery(data, category: str, exclude=()):
 
 
 def chamfer_by_rotation(query: np.ndarray, clouds: np.ndarray, trees) -> np.ndarray:
-    """(G, 24) symmetric chamfer distance between the query turned by each axis map and each cloud."""
-    rotated = np.einsum("rij,nj->rni", AXIS_ROTATIONS, query)                   # (24, n, 3)
+    """Return (G, 24) symmetric chamfers of the query turned by each axis map to each cloud."""
+    rotated = np.einsum('rij,nj->rni', AXIS_ROTATIONS, query)                   # (24, n, 3)
     g, n = clouds.shape[:2]
     flat = clouds.reshape(-1, 3)
     back = np.stack([cKDTree(r).query(flat)[0].reshape(g, n).mean(1) for r in rotated], axis=1)
-    forth = np.stack([t.query(rotated.reshape(-1, 3))[0].reshape(len(rotated), -1).mean(1) for t in trees])
+    forth = np.stack(
+        [t.query(rotated.reshape(-1, 3))[0].reshape(len(rotated), -1).mean(1) for t in trees]
+    )
     return back + forth
 
 
 def audit_one(state: dict, item) -> dict:
-    """item: (name, category, points) of one test object (or of a train object named in
-    state["exclude"][category], which the train objects it is compared with then leave out)."""
+    """
+    Audit one object's frame against its category's train objects.
+
+    item: (name, category, points) of one test object (or of a train object named in
+    state["exclude"][category], which the train objects it is compared with then leave out).
+    """
     name, category, points = item
-    clouds, trees = _gallery(state["data"], category, state.get("exclude", {}).get(category, ()))
+    clouds, trees = _gallery(state['data'], category, state.get('exclude', {}).get(category, ()))
     cost = chamfer_by_rotation(_subsample(points, 0), clouds, trees)
     best = cost.argmin(1)
     nearest = np.argsort(cost.min(1))
-    return {"name": name, "category": category,
-            "nearest_agrees": bool(best[nearest[0]] == IDENTITY),
-            "share_agreeing": float(np.mean(best == IDENTITY)),
-            "nearest_turn_deg": geodesic_deg(AXIS_ROTATIONS[best[nearest[0]]], np.eye(3))}
+    return {'name': name, 'category': category,
+            'nearest_agrees': bool(best[nearest[0]] == IDENTITY),
+            'share_agreeing': float(np.mean(best == IDENTITY)),
+            'nearest_turn_deg': geodesic_deg(AXIS_ROTATIONS[best[nearest[0]]], np.eye(3))}
 
 
 def long_side_along_y(points: np.ndarray) -> np.ndarray:
-    """(n,) for (n, m, 3) clouds: 1.0 where the long horizontal side lies along y, 0.0 along x, NaN where
-    the object is less than ELONGATED times longer than wide (the side that is longer could flip)."""
+    """
+    (n,) for (n, m, 3) clouds.
+
+    1.0 where the long horizontal side lies along y, 0.0 along x, NaN where the object is less than
+    ELONGATED times longer than wide (the side that is longer could flip).
+    """
     extent = points.max(1) - points.min(1)
     along_y = (extent[:, 1] > extent[:, 0]).astype(float)
     ratio = extent[:, :2].max(1) / np.maximum(extent[:, :2].min(1), 1e-12)
@@ -81,23 +111,29 @@ def long_side_along_y(points: np.ndarray) -> np.ndarray:
 def long_sides(train: np.ndarray, test: np.ndarray) -> dict:
     """Share of a category's elongated objects whose long side lies along y, per split."""
     out = {}
-    for split, points in (("train", train), ("test", test)):
+    for split, points in (('train', train), ('test', test)):
         y = long_side_along_y(points)
         y = y[~np.isnan(y)]
-        out[split] = {"elongated": int(len(y)), "along_y": float(y.mean()) if len(y) else float("nan")}
+        out[split] = {
+            'elongated': int(len(y)),
+            'along_y': float(y.mean()) if len(y) else float('nan'),
+        }
     return out
 
 
 def summarise(rows: list[dict]) -> dict:
     out = {}
-    for cat in sorted({r["category"] for r in rows}):
-        sel = [r for r in rows if r["category"] == cat]
-        turns = np.array([r["nearest_turn_deg"] for r in sel])
-        out[cat] = {"objects": len(sel),
-                    # what retrieving the nearest look-alike and registering it perfectly would score
-                    "look_alike_mean_deg": float(turns.mean()), "look_alike_median_deg": float(np.median(turns)),
-                    "nearest_agrees": float(np.mean([r["nearest_agrees"] for r in sel])),
-                    "share_agreeing_median": float(np.median([r["share_agreeing"] for r in sel])),
-                    "quarter_turns": float(np.mean(np.isclose(turns, 90.0, atol=1))),
-                    "half_turns": float(np.mean(np.isclose(turns, 180.0, atol=1)))}
+    for cat in sorted({r['category'] for r in rows}):
+        sel = [r for r in rows if r['category'] == cat]
+        turns = np.array([r['nearest_turn_deg'] for r in sel])
+        out[cat] = {
+            'objects': len(sel),
+            # what retrieving the nearest look-alike and registering it perfectly would score
+            'look_alike_mean_deg': float(turns.mean()),
+            'look_alike_median_deg': float(np.median(turns)),
+            'nearest_agrees': float(np.mean([r['nearest_agrees'] for r in sel])),
+            'share_agreeing_median': float(np.median([r['share_agreeing'] for r in sel])),
+            'quarter_turns': float(np.mean(np.isclose(turns, 90.0, atol=1))),
+            'half_turns': float(np.mean(np.isclose(turns, 180.0, atol=1))),
+        }
     return out

@@ -1,20 +1,41 @@
-"""The methods each table compares, each answering "where is the gallery object in the query?"
-as (R, t) with p_query = R @ p_gallery + t."""
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The methods each table compares.
+
+Each answering "where is the gallery object in the query?" as (R, t) with p_query = R @ p_gallery +
+t.
+"""
+
 from __future__ import annotations
 
 import time
 
 import numpy as np
-
+from pcrp_core.category import prepare, Registrar
 from pcrp_core.config import PAPER_POSE, PAPER_QUERY, PoseOptions
-from pcrp_core.category import Registrar, prepare
 
 PAPER_OPTIONS = PAPER_POSE
 
 
 def paper_variant(model):
-    """The model configured as the paper describes PCRP (top-1 retrieval, no rejection); it
-    shares the model's gallery and its cache of prepared gallery objects."""
+    """
+    Return the model configured as the paper describes PCRP (top-1 retrieval, no rejection).
+
+    It shares the model's gallery and its cache of prepared gallery objects.
+    """
     return model.with_options(pose=PAPER_POSE, **PAPER_QUERY)
 
 
@@ -26,8 +47,11 @@ def _prepared(pointhop, unit: float, points: np.ndarray):
 
 def register_pair(pointhop, unit: float, gallery_points: np.ndarray, query_points: np.ndarray,
                   options: PoseOptions, seed: int = 0):
-    """Register one known object to a moved copy of it (the registration table): both described
-    by the given point features, then the pose stage with the given options."""
+    """
+    Register one known object to a moved copy of it (the registration table).
+
+    Both described by the given point features, then the pose stage with the given options.
+    """
     c_g, g = _prepared(pointhop, unit, np.asarray(gallery_points, dtype=np.float64))
     c_q, q = _prepared(pointhop, unit, np.asarray(query_points, dtype=np.float64))
     _, h = Registrar(q, options, np.random.default_rng(seed)).best_pose([g], [g])
@@ -37,7 +61,11 @@ def register_pair(pointhop, unit: float, gallery_points: np.ndarray, query_point
 
 
 def open3d_pose(fn, query_points: np.ndarray, target) -> tuple[np.ndarray, np.ndarray]:
-    """An Open3D pipeline's answer in the same convention (it moves the query onto the target)."""
+    """
+    Return an Open3D pipeline's answer in the same convention.
+
+    It moves the query onto the target.
+    """
     T = fn(np.asarray(query_points, dtype=np.float64), target)
     R = T[:3, :3].T
     return R, -R @ T[:3, 3]
