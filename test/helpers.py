@@ -16,6 +16,7 @@
 from pathlib import Path
 
 import numpy as np
+from pcrp_core.geometry import rotation_angle_deg
 from scipy.spatial.transform import Rotation
 
 REPO = Path(__file__).resolve().parents[1]
@@ -36,6 +37,4 @@ def random_pose(rng):
     return Rotation.random(random_state=rng).as_matrix(), rng.uniform(-0.5, 0.5, 3)
 
 
-def rotation_error_deg(R_est, R_true) -> float:
-    c = (np.trace(np.asarray(R_est).T @ R_true) - 1.0) / 2.0
-    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+rotation_error_deg = rotation_angle_deg

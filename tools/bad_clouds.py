@@ -29,6 +29,7 @@ import time
 from typing import Callable
 
 import numpy as np
+from pcrp_core.geometry import rotation_angle_deg
 from pcrp_core.sources.views import random_rotation, sensor_view
 from pcrp_ros.conversions import FLOAT32, xyz_to_pointcloud2
 
@@ -323,8 +324,7 @@ class Outcome:
 def _rotation_error(q, R_true) -> float:
     from scipy.spatial.transform import Rotation
     R = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
-    c = (np.trace(R.T @ R_true) - 1) / 2
-    return float(np.degrees(np.arccos(np.clip(c, -1, 1))))
+    return rotation_angle_deg(R, R_true)
 
 
 class CaseRunner:

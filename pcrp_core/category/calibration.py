@@ -34,6 +34,7 @@ import time
 
 import numpy as np
 from pcrp_core.category.evidence import FEATURES, RIGHT_DEG
+from pcrp_core.geometry import rotation_angle_deg
 
 CALIBRATION_SEED = 3_000_017
 PER_CATEGORY = 16  # objects of each category queried, at most
@@ -42,9 +43,7 @@ VIEW_NOISE = 0.005  # range noise of the one-sided views, in object radii
 WHOLE_NOISE = 0.01  # noise of the whole clouds, in object radii: an object measured again
 
 
-def rotation_error_deg(R_est: np.ndarray, R_true: np.ndarray) -> float:
-    c = (np.trace(R_est.T @ R_true) - 1.0) / 2.0
-    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+rotation_error_deg = rotation_angle_deg
 
 
 def calibration_queries(model, per_category: int = PER_CATEGORY, seed: int = CALIBRATION_SEED):

@@ -27,6 +27,7 @@ from __future__ import annotations
 import re
 
 import numpy as np
+from pcrp_core.geometry import rotation_angle_deg
 from pcrp_core.sources.camera import Mesh
 from scipy.spatial import cKDTree
 
@@ -106,8 +107,7 @@ def rotation_error_deg(R_est, R) -> float:
     Blind to symmetry: a can's pose turned about its axis is 'wrong' by this measure and right by
     ADD-S.
     """
-    c = (np.trace(np.asarray(R_est).T @ np.asarray(R)) - 1.0) / 2.0
-    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+    return rotation_angle_deg(R_est, R)
 
 
 def translation_error(R_est, t_est, R, t, centre=np.zeros(3)) -> float:

@@ -21,14 +21,14 @@ And the chamfer distance that defines retrieval's ground truth.
 from __future__ import annotations
 
 import numpy as np
+from pcrp_core.geometry import rotation_angle_deg
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 
 def geodesic_deg(R_est: np.ndarray, R_true: np.ndarray) -> float:
     """Return the angle of the rotation that takes one to the other, in degrees."""
-    c = (np.trace(np.asarray(R_est).T @ np.asarray(R_true)) - 1.0) / 2.0
-    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+    return rotation_angle_deg(R_est, R_true)
 
 
 def euler_errors(R_est: np.ndarray, R_true: np.ndarray) -> np.ndarray:
