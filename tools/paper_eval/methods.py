@@ -26,6 +26,7 @@ import time
 import numpy as np
 from pcrp_core.category import prepare, Registrar
 from pcrp_core.config import PAPER_POSE, PAPER_QUERY, PoseOptions
+from pcrp_core.geometry import normalised
 
 PAPER_OPTIONS = PAPER_POSE
 
@@ -41,7 +42,7 @@ def paper_variant(model):
 
 def _prepared(pointhop, unit: float, points: np.ndarray):
     centre = points.mean(0)
-    normed = (points - centre) / unit
+    normed = normalised(points, unit, centre)
     return centre, prepare(normed, *pointhop.transform(normed))
 
 
