@@ -86,6 +86,7 @@ def machine() -> dict:
         'memory_gb': round(os.sysconf('SC_PAGE_SIZE') * os.sysconf('SC_PHYS_PAGES') / 2**30, 1),
         'versions': versions,
         'date': time.strftime('%Y-%m-%d %H:%M'),
+        'load_start': round(os.getloadavg()[0], 1),
     }
 
 
@@ -474,6 +475,10 @@ def report(res: dict, command: str) -> str:
         + '. All figures are from this run.',
         '',
     ]
+    if 'load_start' in m:
+        # other work on the machine lengthens every time here; say how busy it was
+        end = f" and {m['load_end']} at the end" if 'load_end' in m else ''
+        L += [f"Load average {m['load_start']} at the start{end}, on {m['cores']} cores.", '']
     L += ['## Targets', '', '| target | required | measured | met |', '|---|---|---|---|']
     L += [
         f"| {name} | {need} | {res['verdicts'][name][0]} | "
@@ -759,6 +764,7 @@ def _bench(args) -> int:
     res['node_shipped'] = (bench_node(None, (1,), seconds, 10.0, progress=say)
                            + bench_node(None, (4,), seconds, 2.0, progress=say))
     res['verdicts'] = verdicts(res)
+    res['machine']['load_end'] = round(os.getloadavg()[0], 1)
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
     command = 'python -m tools bench' + (' --quick' if quick else '')
