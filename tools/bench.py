@@ -37,6 +37,7 @@ import tempfile
 import time
 
 import numpy as np
+from tools.process_memory import tree_rss_mb
 
 CATEGORIES = ('airplane', 'chair', 'sofa', 'car')
 THREAD_VARS = ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS')
@@ -88,32 +89,6 @@ def machine() -> dict:
         'date': time.strftime('%Y-%m-%d %H:%M'),
         'load_start': round(os.getloadavg()[0], 1),
     }
-
-
-# -- memory of a process tree ---------------------------------------------------------------------
-def _children(pid: int) -> list[int]:
-    out = []
-    for task in Path(f'/proc/{pid}/task').glob('*'):
-        try:
-            out += [int(c) for c in (task / 'children').read_text().split()]
-        except OSError:
-            pass
-    return out
-
-
-def tree_rss_mb(pid: int) -> float:
-    """Resident memory of a process and all its descendants (build workers included)."""
-    total, todo = 0.0, [pid]
-    while todo:
-        p = todo.pop()
-        try:
-            for line in Path(f'/proc/{p}/status').read_text().splitlines():
-                if line.startswith('VmRSS:'):
-                    total += int(line.split()[1]) / 1024.0
-        except OSError:
-            continue
-        todo += _children(p)
-    return total
 
 
 def run_measured(cmd: list[str], env: dict | None = None) -> dict:

@@ -107,7 +107,7 @@ class _NodeProcesses:
 
     def rss_mb(self) -> float:
         """Return the node processes' resident memory, their worker processes' included."""
-        from tools.bench import tree_rss_mb
+        from tools.process_memory import tree_rss_mb
         return sum(tree_rss_mb(p.pid) for p in self.procs)
 
     def stop(self) -> list[int]:
