@@ -243,18 +243,18 @@ class PoseOptions(Options):
         high=1.0,
     )
     seeders: int = setting(
-        8,
+        0,
         'Whole clouds: top candidates that seed hypotheses (0: all; at least those matched).',
         low=0,
     )
     seeders_view: int = setting(0, 'The same for clouds from a sensor.', low=0)
     whole_features: bool = setting(
-        False,
+        True,
         'Whole clouds: also seed RANSAC hypotheses from the point features of the '
         'n_matched first candidates (principal axes and half turns find the same '
         "poses, without the gallery's features).",
     )
-    pool_size: int = setting(4, 'Whole clouds: distinct rotations that go to the vote.', low=1)
+    pool_size: int = setting(6, 'Whole clouds: distinct rotations that go to the vote.', low=1)
     pool_size_view: int = setting(6, 'The same for clouds from a sensor.', low=1)
     reverse_weight: float = setting(
         0.5,
@@ -267,21 +267,21 @@ class PoseOptions(Options):
     )
     visibility_weight: float = setting(
         1.0,
-        'Sensor clouds: weight of the gallery points the sensor would see but ' 'the query lacks.',
+        'Sensor clouds: weight of the gallery points the sensor would see but the query lacks.',
         low=0.0,
     )
     coarse_icp_iterations: int = setting(
         6, 'ICP iterations per hypothesis before hypotheses are compared.', low=0
     )
     vote_icp_iterations: int = setting(
-        1, 'Whole clouds: ICP iterations per hypothesis and candidate before the ' 'vote.', low=0
+        6, 'Whole clouds: ICP iterations per hypothesis and candidate before the vote.', low=0
     )
     vote_icp_iterations_view: int = setting(6, 'The same for clouds from a sensor.', low=0)
     icp_tolerance: float = setting(
         1e-6, 'ICP stops once the trimmed mean squared error gains less.', low=0.0
     )
     final_ratio: float = setting(
-        1.3,
+        float('inf'),
         'Whole clouds: candidates whose fit in the vote is within this factor of the '
         'best are fully refined (the others do not end near the best).',
         low=1.0,
