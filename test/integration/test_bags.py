@@ -13,6 +13,9 @@
 # limitations under the License.
 
 """Bags: make-bag writes clouds with ground truth, process answers them into a results bag."""
+import subprocess
+import sys
+
 from helpers import PROCEDURAL_MODEL
 import numpy as np
 from pcrp_core import PCRP
@@ -85,10 +88,14 @@ def test_a_recording_cut_short_keeps_its_whole_messages(tmp_path):
     assert not clouds and any('cannot open bag' in p for p in problems)
 
 
-def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path, capsys):
-    import subprocess
-    import sys
+def _process_command(bag, out, *options):
+    """Run `pcrp process` as a user would, in its own process."""
+    return subprocess.run(
+        [sys.executable, '-m', 'pcrp_ros.cli', 'process', str(bag), '--out', str(out), *options],
+        capture_output=True, text=True, timeout=120)
 
+
+def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path, capsys):
     from tools.robustness import mixed_bag
     bag = tmp_path / 'mixed'
     written = mixed_bag(bag)
@@ -104,40 +111,11 @@ def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path
     )
     assert [r['status'] for r in rows].count('rejected: missing_field') == 1 and len(rows) == 4
     assert 'skipped clouds on topics not asked for: other/points (3)' in capsys.readouterr().err
-    out = subprocess.run(
-        [
-            sys.executable,
-            '-m',
-            'pcrp_ros.cli',
-            'process',
-            str(bag),
-            '--out',
-            str(tmp_path / 'none'),
-            '--topics',
-            'no/such/topic',
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    out = _process_command(bag, tmp_path / 'none', '--topics', 'no/such/topic')
     assert out.returncode == 1 and 'no clouds on the topics asked for: no/such/topic' in out.stderr
     # an unusable up direction stops process before any cloud, with one line; a usable one is
     # passed on
-    out = subprocess.run(
-        [
-            sys.executable,
-            '-m',
-            'pcrp_ros.cli',
-            'process',
-            str(bag),
-            '--out',
-            str(tmp_path / 'up0'),
-            '--up=0,0,0',
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    out = _process_command(bag, tmp_path / 'up0', '--up=0,0,0')
     assert out.returncode == 2 and 'up must be' in out.stderr and 'Traceback' not in out.stderr
     model, seen = PCRP.load(PROCEDURAL_MODEL), []
     estimate = model.estimate
