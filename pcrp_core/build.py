@@ -30,13 +30,60 @@ from pcrp_core.config import PoseOptions
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
 from pcrp_core.geometry import normalised, unit_axis
+from pcrp_core.instance.templates import object_templates as render_templates
 from pcrp_core.instance.templates import stack as stack_templates
-from pcrp_core.instance.templates import TemplateSettings
-from pcrp_core.parallel import (object_features, object_mirror, object_templates, parallel_map,
-                                view_vectors)
+from pcrp_core.instance.templates import Templates, TemplateSettings
+from pcrp_core.parallel import parallel_map
 from pcrp_core.preprocess import downsample, finite_points
-from pcrp_core.visibility import sphere_directions
+from pcrp_core.visibility import sphere_directions, visible_from
 from pcrp_core.vlad import VLAD
+
+
+# -- one object each, in a worker process (parallel.py): module-level so that they pickle ---------
+def object_features(state: dict, cloud: np.ndarray) -> np.ndarray:
+    return state['pointhop'].transform(cloud)[1]
+
+
+def object_mirror(state: dict, cloud: np.ndarray) -> np.ndarray:
+    """Return the mirror plane of one normalised gallery cloud as 4 numbers (see mirror.py)."""
+    from pcrp_core.registration.mirror import gallery_mirror, plane_row
+    from scipy.spatial import cKDTree
+    return plane_row(gallery_mirror(cloud, cKDTree(cloud), state['tolerance'], state['max_deg']))
+
+
+def view_vectors(state: dict, cloud_and_cameras) -> list[np.ndarray]:
+    """VLAD vectors of what a sensor at each camera position sees of the cloud."""
+    cloud, cameras = cloud_and_cameras
+    out = []
+    for cam in cameras:
+        seen = cloud[visible_from(cloud, cam)]
+        if len(seen) >= 64:
+            out.append(state['vlad'].transform(state['pointhop'].transform(seen, cam)[1]))
+    return out
+
+
+def object_templates(state: dict, mesh) -> dict:
+    """Return what a camera sees of one gallery mesh (instance/templates.py)."""
+    return render_templates(mesh, state['settings'], seed=state['seed'])
+
+
+# -- the model's parts ----------------------------------------------------------------------------
+@dataclasses.dataclass
+class LearntParts:
+    """What building learns from the gallery: PCRP's constructor arguments, and the meshes."""
+
+    pointhop: PointHop
+    vlad: VLAD
+    gallery: Gallery
+    unit: float
+    meta: dict
+    n_points: int
+    templates: Templates | None
+    meshes: list
+
+    def model_arguments(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                if f.name != 'meshes'}
 
 
 def common_up(objects) -> np.ndarray | None:
@@ -72,12 +119,12 @@ def mirror_planes(clouds, unit: float, n_jobs: int | None = None, progress=None)
     return np.stack(rows) if rows else np.zeros((0, 4))
 
 
-def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregation: str = 'vlad',
+def learn_parts(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregation: str = 'vlad',
                 n_points: int = 1024, fit_clouds: int = 400, energy_threshold1: float = 1e-3,
                 energy_threshold2: float = 5e-4, views: int = 0, seed: int = 0, sources=(),
-                progress=None, n_jobs: int | None = None, up_axis=None, calibrate: bool = True):
+                progress=None, n_jobs: int | None = None, up_axis=None) -> LearntParts:
     """
-    Return a PCRP model of the pre-aligned gallery objects.
+    Learn a model's parts from the pre-aligned gallery objects (PCRP.build assembles them).
 
     The objects are GalleryObject-like: gallery_id, category, points and optionally up and mesh.
 
@@ -87,11 +134,8 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
     iterables (e.g. tqdm); n_jobs processes describe the objects (default: one per core; the
     result does not depend on it). up_axis: the objects' up axis in their own frame; by default
     the one their sources state when they all agree. When every object comes with its mesh (in
-    metres), camera templates are made; with calibrate, the confidence of answers is learnt (both
-    paths: category/calibration.py, and instance/calibration.py for meshes).
+    metres), camera templates are made.
     """
-    from pcrp_core.pipeline import PCRP
-
     objects = list(objects)
     if not objects:
         raise ValueError('cannot build a model from an empty gallery')
@@ -151,13 +195,20 @@ def build_model(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
         'built': time.strftime('%Y-%m-%dT%H:%M:%S'),
         'templates': None if templates is None else dataclasses.asdict(settings),
     }
-    model = PCRP(pointhop, vlad, gallery, unit, meta, n_points, templates)
-    if templates is not None and calibrate:
+    return LearntParts(pointhop, vlad, gallery, unit, meta, n_points, templates,
+                       meshes if templates is not None else [])
+
+
+def calibrate(model, meshes: list, n_jobs: int | None = None, progress=None) -> None:
+    """
+    Learn the confidence of the model's answers on views of its own gallery.
+
+    Both paths: category/calibration.py, and instance/calibration.py when the gallery has meshes.
+    """
+    if model.templates is not None and meshes:
         from pcrp_core.instance.calibration import calibrate as calibrate_views
         model.view_calibration, model.meta['twins'] = calibrate_views(
             model, meshes, n_jobs, progress
         )
-    if calibrate:
-        from pcrp_core.category.calibration import calibrate as calibrate_category
-        model.category_calibration = calibrate_category(model, n_jobs, progress)
-    return model
+    from pcrp_core.category.calibration import calibrate as calibrate_category
+    model.category_calibration = calibrate_category(model, n_jobs, progress)

@@ -20,13 +20,13 @@ time and single-threaded inside Open3D and numpy for clouds this small, so objec
 worker processes. joblib's loky workers (joblib comes with scikit-learn) start as fresh
 interpreters: a plain fork after Open3D has run its OpenMP pool can hang the child, and
 multiprocessing's spawn re-runs the caller's script unless it has a __main__ guard. Objects go in
-chunks, so the fitted estimators are shipped once per chunk, not once per object.
+chunks, so the fitted estimators are shipped once per chunk, not once per object. The functions
+run in the workers live beside their callers (build.py, instance/calibration.py, ...), at module
+level so that they pickle by name.
 """
 from __future__ import annotations
 
 import os
-
-import numpy as np
 
 
 def default_jobs() -> int:
@@ -67,43 +67,3 @@ def parallel_map(
         for part in wrap(results, desc=desc, unit=f'x{chunksize} obj', total=len(chunks))
         for r in part
     ]
-
-
-def object_features(state: dict, cloud: np.ndarray) -> np.ndarray:
-    return state['pointhop'].transform(cloud)[1]
-
-
-def object_mirror(state: dict, cloud: np.ndarray) -> np.ndarray:
-    """
-    Return the mirror plane of one normalised gallery cloud as 4 numbers.
-
-    See registration/mirror.py.
-    """
-    from pcrp_core.registration.mirror import gallery_mirror, plane_row
-    from scipy.spatial import cKDTree
-    return plane_row(gallery_mirror(cloud, cKDTree(cloud), state['tolerance'], state['max_deg']))
-
-
-def view_vectors(state: dict, cloud_and_cameras) -> list[np.ndarray]:
-    """VLAD vectors of what a sensor at each camera position sees of the cloud."""
-    from pcrp_core.visibility import visible_from
-    cloud, cameras = cloud_and_cameras
-    out = []
-    for cam in cameras:
-        seen = cloud[visible_from(cloud, cam)]
-        if len(seen) >= 64:
-            out.append(state['vlad'].transform(state['pointhop'].transform(seen, cam)[1]))
-    return out
-
-
-def object_templates(state: dict, mesh) -> dict:
-    """Return what a camera sees of one gallery mesh (instance/templates.py)."""
-    from pcrp_core.instance.templates import object_templates as render
-    return render(mesh, state['settings'], seed=state['seed'])
-
-
-def calibration_answers(state: dict, index_and_scene) -> dict:
-    """One calibration view, answered (instance/calibration.py)."""
-    from pcrp_core.instance.calibration import answer_view
-    index, scene = index_and_scene
-    return answer_view(state['model'], index, scene)

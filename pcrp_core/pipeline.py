@@ -90,10 +90,18 @@ class PCRP:
         )
 
     @classmethod
-    def build(cls, objects, **kwargs) -> 'PCRP':
-        """Return a model of the gallery objects: see build.build_model for the arguments."""
-        from pcrp_core.build import build_model
-        return build_model(objects, **kwargs)
+    def build(cls, objects, *, calibrate: bool = True, **kwargs) -> 'PCRP':
+        """
+        Return a model of the gallery objects: see build.learn_parts for the arguments.
+
+        With calibrate, the confidence of its answers is learnt on views of its own gallery.
+        """
+        from pcrp_core import build
+        parts = build.learn_parts(objects, **kwargs)
+        model = cls(**parts.model_arguments())
+        if calibrate:
+            build.calibrate(model, parts.meshes, kwargs.get('n_jobs'), kwargs.get('progress'))
+        return model
 
     # -- settings -------------------------------------------------------------------------------
     def get_params(self) -> dict:

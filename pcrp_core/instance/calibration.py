@@ -133,6 +133,12 @@ def answer_view(model, index: int, scene) -> dict:
     return out
 
 
+def calibration_answers(state: dict, index_and_scene) -> dict:
+    """Answer one (index, scene) pair with the state's model, in a worker process."""
+    index, scene = index_and_scene
+    return answer_view(state['model'], index, scene)
+
+
 def find_twins(views: list[dict]) -> list[tuple[int, int]]:
     """
     Find the pairs (i, j) of objects each of which, left out, is answered as the other.
@@ -186,7 +192,7 @@ def calibrate(
     (instance/answer.py).
     """
     from pcrp_core.confidence import fit_calibration
-    from pcrp_core.parallel import calibration_answers, parallel_map
+    from pcrp_core.parallel import parallel_map
 
     if views_per_object is None:
         kinds = 2 if model.up_axis is not None else 1
