@@ -750,22 +750,23 @@ def _bench(args) -> int:
 
 
 def main(argv=None) -> int:
+    """`python -m tools.bench _queries ...`: bench_queries in a fresh process (see above)."""
     argv = sys.argv[1:] if argv is None else argv
-    if argv and argv[0] == '_queries':
-        model_path, data, n, n_points, seed, baselines, variants, out = argv[1:]
-        r = bench_queries(
-            model_path,
-            Path(data),
-            int(n),
-            int(n_points),
-            int(seed),
-            baselines == '1',
-            variants=variants == '1',
-        )
-        Path(out).write_text(json.dumps(r))
-        return 0
-    from tools.__main__ import main as tools_main
-    return tools_main(['bench', *argv])
+    if not argv or argv[0] != '_queries':
+        print('usage: python -m tools bench [options]', file=sys.stderr)
+        return 2
+    model_path, data, n, n_points, seed, baselines, variants, out = argv[1:]
+    r = bench_queries(
+        model_path,
+        Path(data),
+        int(n),
+        int(n_points),
+        int(seed),
+        baselines == '1',
+        variants=variants == '1',
+    )
+    Path(out).write_text(json.dumps(r))
+    return 0
 
 
 if __name__ == '__main__':

@@ -18,7 +18,7 @@ Put the Apache-2.0 notice that test_copyright.py wants at the top of .py files l
 A file that already starts with a copyright notice, or is empty, is left alone; a shebang
 stays first. Usage:
 
-    python tools/license_header.py [--check] PATH...
+    python -m tools.license_header [--check] PATH...
 
 PATHs are files or folders (every .py file below them, folders starting with . or _ skipped).
 --check changes nothing and exits 1 when some file lacks the notice.
@@ -28,6 +28,8 @@ import argparse
 from pathlib import Path
 import sys
 import time
+
+from tools.source_files import python_files
 
 HEADER = """\
 # Copyright {year} The pcrp authors
@@ -57,16 +59,6 @@ def with_header(source: str, year: int) -> str:
     return ''.join(shebang) + HEADER.format(year=year) + rest.lstrip('\n')
 
 
-def _files(paths):
-    for p in map(Path, paths):
-        if p.is_dir():
-            yield from sorted(q for q in p.rglob('*.py')
-                              if not any(part.startswith(('.', '_'))
-                                         for part in q.relative_to(p).parts[:-1]))
-        else:
-            yield p
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.strip().split('\n')[0])
     parser.add_argument('paths', nargs='+')
@@ -74,7 +66,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     year = time.gmtime().tm_year
     missing = 0
-    for path in _files(args.paths):
+    for path in python_files(args.paths):
         source = path.read_text()
         new = with_header(source, year)
         if new == source:

@@ -36,31 +36,9 @@ import subprocess
 import sys
 import time
 
-SCENARIOS = {   # name: (kind, occluded, up known to the method)
-    'free': ('free', False, False),
-    'table': ('table', False, True),
-    'free_occluded': ('free', True, False),
-    'table_occluded': ('table', True, True),
-}
-SEEDS = {'test': 0, 'validation': 1000}
-METHODS = {
-    'pcrp': 'pcrp (README recipe, defaults)',
-    'ransac': 'FPFH + RANSAC + ICP, own retrieval',
-    'fgr': 'FPFH + FGR + ICP, own retrieval',
-    'ransac_told': 'FPFH + RANSAC + ICP, told the object',
-    'fgr_told': 'FPFH + FGR + ICP, told the object',
-}
-BASELINES = ('ransac', 'fgr', 'ransac_told', 'fgr_told')
-VIEWS_PER_OBJECT = 2
-QUICK_OBJECTS = 4
-# The objects the second model is built without: HELD_OUT of them, drawn by a permutation of
-# the gallery seeded with HOLDOUT_SEED, each with the objects the full model records as its
-# twins (an object whose twin stays would not be unknown: the twin answers it, rightly). Fixed
-# before any view was answered, and never changed.
-HELD_OUT = 18
-HOLDOUT_SEED = 18
-LOOKALIKE = 0.002   # metres of chamfer: a held-out object this near one left is nearly known
-RECIPE = ('--up-axis', 'z')
+from tools.robot_protocol import (BASELINES, HELD_OUT, HOLDOUT_SEED, LOOKALIKE, METHODS,
+                                    QUICK_OBJECTS, RECIPE, SCENARIOS, SEEDS, VIEWS_PER_OBJECT)
+
 REPO = Path(__file__).resolve().parents[1]
 CACHE = Path(os.environ.get('PCRP_CACHE', Path.home() / '.cache' / 'pcrp')) / 'robot'
 THREAD_VARS = ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS')

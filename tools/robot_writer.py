@@ -31,7 +31,7 @@ from pcrp_core.evaluation.run import cell, COLUMNS, jsonable, statistics, summar
 from pcrp_core.evaluation.scenes import DISTANCE, ELEVATION_DEG, MIN_PIXELS, OCCLUDED_SHARE
 from pcrp_core.instance.calibration import CALIBRATION_SEED
 from pcrp_core.sources.camera import PinholeCamera, RangeNoise
-from tools.robot_report import SEEDS, VIEWS_PER_OBJECT
+from tools.robot_protocol import SEEDS, VIEWS_PER_OBJECT
 
 FILES = {'test': 'robot', 'validation': 'robot_validation'}
 SCENARIO_TITLES = {'free': 'free in space', 'table': 'on a table, up known',
@@ -368,7 +368,7 @@ def _unknown_section(res: dict) -> str:
     near = ho['lookalikes']
     text = [
         f"{len(ho['objects'])} objects held out, drawn by a permutation of the gallery seeded "
-        f"with {ho['seed']} (fixed in tools/robot_report.py before any view was answered), each "
+        f"with {ho['seed']} (fixed in tools/robot_protocol.py before any view was answered), each "
         f'with the objects the full model records as its twins: '
         + ', '.join(f'`{g}`' for g in ho['objects'])
         + f'. The second model has the other {n_gallery} objects, {how}; it answers every view '

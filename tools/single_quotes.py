@@ -21,7 +21,7 @@ as they are, and nothing is rewrapped or moved (from Python 3.12 on, f-strings a
 parts and left alone). Each file's syntax tree is compared before and after, and a file whose
 tree would change is left untouched. Usage:
 
-    python tools/single_quotes.py [--check] PATH...
+    python -m tools.single_quotes [--check] PATH...
 
 PATHs are files or folders (every .py file below them). --check changes nothing and exits 1
 when some string would change.
@@ -33,6 +33,8 @@ import io
 from pathlib import Path
 import sys
 import tokenize
+
+from tools.source_files import python_files
 
 PREFIX_CHARS = set('rRbBuUfF')
 STATEMENT_START = {tokenize.NEWLINE, tokenize.NL, tokenize.INDENT, tokenize.DEDENT,
@@ -78,24 +80,13 @@ def convert(source: str) -> tuple[str, int]:
     return ''.join(''.join(c) for c in chars), len(edits)
 
 
-def _files(paths):
-    for p in map(Path, paths):
-        if p.is_dir():
-            # folders starting with . or _ are skipped, as ament's linters skip them
-            yield from sorted(q for q in p.rglob('*.py')
-                              if not any(part.startswith(('.', '_'))
-                                         for part in q.relative_to(p).parts[:-1]))
-        else:
-            yield p
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('paths', nargs='+')
     parser.add_argument('--check', action='store_true', help='report only; exit 1 if any')
     args = parser.parse_args(argv)
     pending = 0
-    for path in _files(args.paths):
+    for path in python_files(args.paths):
         source = path.read_text()
         converted, count = convert(source)
         if not count:
