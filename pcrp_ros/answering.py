@@ -40,13 +40,14 @@ import time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 import numpy as np
-from pcrp_core import InvalidCloud, ModelError, PCRP
+from pcrp_core import InvalidCloud
 from pcrp_core.config import PoseOptions, QueryOptions
 from pcrp_ros.conversions import aligned_points, CloudFormatError, detections_msg
 from pcrp_ros.conversions import pointcloud2_to_xyz, pose_stamped, xyz_to_pointcloud2
+from pcrp_ros.engine import Engine, load_engine, LOAD_ERRORS, ReloadRequest
 from pcrp_ros.parameters import descriptor, MODEL_SETTINGS, NodeSettings, parameters, ros_value
 from pcrp_ros.stats import StreamStats
-from pcrp_ros.workers import LocalEstimator, ProcessEstimator, WorkerDied, WorkerStartError
+from pcrp_ros.workers import ProcessEstimator, WorkerDied
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.parameter import Parameter
@@ -55,89 +56,10 @@ from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 
-# what a failed model load raises: the model's own checks, settings it cannot take, workers
-LOAD_ERRORS = (ModelError, ValueError, WorkerStartError, OSError)
 # seconds between two attempts to restart a worker process that could not be restarted
 RESTART_BACKOFF = 10.0
 # seconds the reload service waits for the new model before answering
 RELOAD_WAIT = 600.0
-
-
-class Engine:
-    """One loaded model and what answers with it: the model itself, or worker processes."""
-
-    def __init__(self, model, path: str, estimators: list):
-        self.model = model
-        self.path = path
-        self.estimators = estimators
-        self.restarts = 0
-        self.down = {}            # worker index -> why it is down
-        self.retry_at = {}        # worker index -> when to try starting it again
-        self._closed = set()
-        self._lock = threading.Lock()
-
-    def describe(self) -> str:
-        where = self.path or 'the shipped default model'
-        return (f'{where} ({len(self.model.gallery_ids)} gallery objects: '
-                f"{', '.join(self.model.categories)})")
-
-    def release(self, k: int) -> None:
-        """Stop worker k (idempotent); the other workers are left alone."""
-        with self._lock:
-            if k in self._closed:
-                return
-            self._closed.add(k)
-            estimator = self.estimators[k]
-        if estimator is not None:
-            estimator.close()
-
-    def close(self) -> None:
-        for k in range(len(self.estimators)):
-            self.release(k)
-
-    def pids(self) -> list:
-        return [getattr(e, 'pid', None) for e in self.estimators]
-
-
-def load_engine(path: str, params: dict, up, workers: int, model=None) -> Engine:
-    """
-    Load and check the model at path (or take the given one) and start the workers.
-
-    The settings are applied; LOAD_ERRORS say why not, with nothing left running.
-    """
-    model = model if model is not None else PCRP.load(path or None)
-    model.set_params(**params)
-    if up is not None:
-        model.check_up(up)
-    if workers == 1:
-        return Engine(model, path, [LocalEstimator(model)])
-    started = []
-    try:
-        # started together, so they load side by side
-        for _ in range(workers):
-            started.append(ProcessEstimator(path, params, wait=False))
-        for estimator in started:
-            estimator.wait_ready()
-    except BaseException:
-        for estimator in started:
-            estimator.close()
-        raise
-    return Engine(model, path, started)
-
-
-class ReloadRequest:
-    """A request to switch models; done is set once it succeeded or failed (ok, message)."""
-
-    def __init__(self, path: str, from_parameter: bool):
-        self.path = path
-        self.from_parameter = from_parameter
-        self.done = threading.Event()
-        self.ok = False
-        self.message = ''
-
-    def finish(self, ok: bool, message: str) -> None:
-        self.ok, self.message = ok, message
-        self.done.set()
 
 
 class CloudAnswerer:

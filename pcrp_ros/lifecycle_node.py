@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import sys
 
-from pcrp_ros.answering import CloudAnswerer, LOAD_ERRORS
+from pcrp_ros.answering import CloudAnswerer
+from pcrp_ros.engine import LOAD_ERRORS
 from pcrp_ros.node import run
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 

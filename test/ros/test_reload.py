@@ -27,7 +27,6 @@ from helpers import PROCEDURAL_MODEL
 import numpy as np
 from pcrp_core import PCRP
 from pcrp_core.model_io import ARRAYS_FILE
-from pcrp_ros import answering
 from pcrp_ros.conversions import xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode
 import pytest
@@ -134,7 +133,7 @@ def test_a_stream_goes_on_through_a_switch_without_loss(node_and_stream, tmp_pat
         model = real_load(path)
         _answered_by(model, 'b', who)
         return model
-    monkeypatch.setattr(answering.PCRP, 'load', slow_load)
+    monkeypatch.setattr(PCRP, 'load', slow_load)
 
     stream.thread.start()
     assert wait_for(lambda: stream.answered() >= 2, 60)
