@@ -25,7 +25,6 @@ PATHs are files or folders (every .py file below them, folders starting with . o
 """
 
 import argparse
-from pathlib import Path
 import sys
 import time
 

@@ -37,7 +37,7 @@ import sys
 import time
 
 from tools.robot_protocol import (BASELINES, HELD_OUT, HOLDOUT_SEED, LOOKALIKE, METHODS,
-                                    QUICK_OBJECTS, RECIPE, SCENARIOS, SEEDS, VIEWS_PER_OBJECT)
+                                  QUICK_OBJECTS, RECIPE, SCENARIOS, SEEDS, VIEWS_PER_OBJECT)
 
 REPO = Path(__file__).resolve().parents[1]
 CACHE = Path(os.environ.get('PCRP_CACHE', Path.home() / '.cache' / 'pcrp')) / 'robot'

@@ -30,7 +30,6 @@ when some string would change.
 import argparse
 import ast
 import io
-from pathlib import Path
 import sys
 import tokenize
 
