@@ -28,7 +28,7 @@ The plain node runs configure and activate in its constructor. Clouds are checke
 (cheap), so every unusable one is refused and counted under its reason however busy the
 workers are; usable ones wait in a short queue per topic (`queue_size`: a cloud arriving at a
 full queue pushes out its oldest, counted as dropped_stale, so a slow model never builds a
-backlog), and `workers` threads answer the oldest waiting cloud of any topic first.
+backlog), and `workers` threads answer the topics in turn.
 """
 
 from __future__ import annotations
@@ -84,7 +84,8 @@ class CloudAnswerer:
         self._timer = None
         self._service = None
         self._cv = threading.Condition()
-        self._slots = {}
+        self._slots = {}          # topic -> clouds waiting, oldest first
+        self._served = {}         # topic -> when a worker last took one of its clouds
         self._threads = []
         self._running = False
         self._retired = []
@@ -362,12 +363,17 @@ class CloudAnswerer:
                 self._cv.wait(min(wait, 1.0))
                 continue
             if self._slots:
-                # the oldest waiting cloud of any topic first: fair, and no cloud waits longest
-                topic = min(self._slots, key=lambda t: self._slots[t][0][2])
+                # topics take turns: the one served longest ago first (then the oldest cloud).
+                # Picking the oldest cloud alone starves all topics but one once the node falls
+                # behind: every queue then holds only its newest clouds, and the topic published
+                # first in each round always holds the oldest of them.
+                topic = min(self._slots,
+                            key=lambda t: (self._served.get(t, -1.0), self._slots[t][0][2]))
                 waiting = self._slots[topic]
                 item = waiting.popleft()
                 if not waiting:
                     del self._slots[topic]
+                self._served[topic] = time.monotonic()
                 return ('answer', topic, item)
             self._cv.wait()
 

@@ -342,3 +342,32 @@ def test_a_short_queue_absorbs_a_slow_answer_and_pushes_out_the_oldest(
             lambda: stats.counts['answered'] + stats.counts['rejected'] == answered, 30
         )
         node.destroy_node()
+
+
+def test_topics_take_turns_when_the_node_falls_behind(model, monkeypatch):
+    # each round both topics get a newer cloud while one is being answered, so each queue holds
+    # only its newest; picking the oldest waiting cloud would answer topic a every time
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=[
+            Parameter('input_topics', value=['a', 'b']), Parameter('queue_size', value=1),
+            Parameter('sensor_at_origin', value=False)])
+        gate, order = threading.Semaphore(0), []
+        real = model.estimate
+
+        def slow(points, *args, **kwargs):
+            order.append('a' if np.mean(points[:, 2]) < 2.5 else 'b')
+            assert gate.acquire(timeout=30)
+            return real(points, *args, **kwargs)
+        monkeypatch.setattr(model, 'estimate', slow)
+        cloud = model.gallery_cloud(model.gallery_ids[0]).astype(np.float64)
+        a, b = cloud + [0.0, 0.0, 2.0], cloud + [0.0, 0.0, 3.0]
+        node.answerer._on_cloud('a', xyz_to_pointcloud2(a, _header(1)))
+        for sec in range(2, 6):
+            assert wait_for(lambda: len(order) == sec - 1, 30)
+            node.answerer._on_cloud('a', xyz_to_pointcloud2(a, _header(sec)))
+            node.answerer._on_cloud('b', xyz_to_pointcloud2(b, _header(sec)))
+            gate.release()
+        assert wait_for(lambda: len(order) == 5, 30)
+        gate.release()
+        assert order == ['a', 'b', 'a', 'b', 'a']
+        node.destroy_node()
