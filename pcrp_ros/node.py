@@ -35,12 +35,6 @@ from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 
-# The executor thread takes every cloud from DDS while a worker thread of this process answers
-# another; the worker holds the GIL between numpy calls, and at Python's default 5 ms switch
-# interval the executor waits up to that long each of the many times it retakes the GIL, so the
-# reader's queue overflowed and clouds were lost before they were taken (two topics at 10 Hz on
-# the four-category model: 464 of 800 clouds received; 798 at 0.5 ms).
-GIL_SWITCH_INTERVAL_S = 0.0005
 # what stops a node at start-up with one line: a broken model, a mistyped parameter or topic
 START_ERRORS = (ModelError, ValueError, ParameterException, NameValidationException,
                 WorkerStartError)
@@ -79,7 +73,6 @@ def run(make_node, program: str, args=None) -> int:
     # a crash inside DDS or Open3D prints the Python stack of every thread, and `kill -USR1 <pid>`
     # prints them on demand (what a stuck node is doing), instead of dying or hanging silently
     faulthandler.enable(all_threads=True)
-    sys.setswitchinterval(GIL_SWITCH_INTERVAL_S)
     if hasattr(signal, 'SIGUSR1'):
         faulthandler.register(signal.SIGUSR1, all_threads=True)
     rclpy.init(args=args)
