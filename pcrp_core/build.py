@@ -195,17 +195,17 @@ def learn_parts(objects, *, hop1: str = 'fpfh', n_clusters: int = 10, aggregatio
         'built': time.strftime('%Y-%m-%dT%H:%M:%S'),
         'templates': None if templates is None else dataclasses.asdict(settings),
     }
-    return LearntParts(pointhop, vlad, gallery, unit, meta, n_points, templates,
-                       meshes if templates is not None else [])
+    return LearntParts(pointhop, vlad, gallery, unit, meta, n_points, templates, meshes)
 
 
 def calibrate(model, meshes: list, n_jobs: int | None = None, progress=None) -> None:
     """
     Learn the confidence of the model's answers on views of its own gallery.
 
-    Both paths: category/calibration.py, and instance/calibration.py when the gallery has meshes.
+    Both paths: category/calibration.py, and instance/calibration.py when the model has camera
+    templates (made when every gallery object came with its mesh: meshes, in gallery order).
     """
-    if model.templates is not None and meshes:
+    if model.templates is not None:
         from pcrp_core.instance.calibration import calibrate as calibrate_views
         model.view_calibration, model.meta['twins'] = calibrate_views(
             model, meshes, n_jobs, progress

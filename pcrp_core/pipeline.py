@@ -90,17 +90,18 @@ class PCRP:
         )
 
     @classmethod
-    def build(cls, objects, *, calibrate: bool = True, **kwargs) -> 'PCRP':
+    def build(cls, objects, *, calibrate: bool = True, n_jobs: int | None = None, progress=None,
+              **kwargs) -> 'PCRP':
         """
         Return a model of the gallery objects: see build.learn_parts for the arguments.
 
         With calibrate, the confidence of its answers is learnt on views of its own gallery.
         """
         from pcrp_core import build
-        parts = build.learn_parts(objects, **kwargs)
+        parts = build.learn_parts(objects, n_jobs=n_jobs, progress=progress, **kwargs)
         model = cls(**parts.model_arguments())
         if calibrate:
-            build.calibrate(model, parts.meshes, kwargs.get('n_jobs'), kwargs.get('progress'))
+            build.calibrate(model, parts.meshes, n_jobs, progress)
         return model
 
     # -- settings -------------------------------------------------------------------------------
