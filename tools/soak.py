@@ -25,6 +25,7 @@ short one.
 from __future__ import annotations
 
 from collections import Counter
+import os
 from pathlib import Path
 import signal
 import subprocess
@@ -37,6 +38,27 @@ import numpy as np
 from tools.bad_clouds import CASES, good_cloud, GoodCloud
 
 NODE_NAME = 'pcrp_soak_node'
+# Fast DDS reads the file this variable names when a process creates its first participant
+PROFILE_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
+LARGE_CLOUDS_PROFILE = Path(__file__).resolve().parents[1] / 'config' / 'fastdds_large_clouds.xml'
+_driver_profile_in_use: list = []
+
+
+def use_driver_profile(profile: str | None) -> None:
+    """
+    Give the driver's DDS participant a Fast DDS profile (None: Fast DDS's defaults).
+
+    The driver stands for the segmenter publishing the clouds, the side
+    config/fastdds_large_clouds.xml is meant for. Fast DDS reads the profile once per process,
+    so every run in one process must ask for the same one.
+    """
+    profile = str(profile) if profile else None
+    if _driver_profile_in_use and _driver_profile_in_use[0] != profile:
+        raise ValueError(f'this process already published with the Fast DDS profile '
+                         f'{_driver_profile_in_use[0]}; one profile per process')
+    _driver_profile_in_use[:] = [profile]
+    if profile:
+        os.environ[PROFILE_VARIABLE] = profile
 
 
 def refused_on_arrival():
@@ -94,8 +116,12 @@ class _NodeProcesses:
             '--params-file',
             str(params),
         ]
+        # the node runs as it would without the driver's profile (see use_driver_profile)
+        env = dict(os.environ)
+        if _driver_profile_in_use and env.get(PROFILE_VARIABLE) == _driver_profile_in_use[0]:
+            del env[PROFILE_VARIABLE]
         return subprocess.Popen(
-            cmd, stdout=(self.dir / f'{name}.log').open('w'), stderr=subprocess.STDOUT
+            cmd, stdout=(self.dir / f'{name}.log').open('w'), stderr=subprocess.STDOUT, env=env
         )
 
     def diagnostic_names(self) -> dict:
@@ -168,7 +194,7 @@ def camera_clouds(n: int) -> list[GoodCloud]:
 
 def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
         model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print,
-        workers: int = 1, reliable: bool = False) -> dict:
+        workers: int = 1, reliable: bool = False, driver_profile: str | None = None) -> dict:
     from geometry_msgs.msg import PoseStamped
     from pcrp_core import PCRP
     from pcrp_ros.conversions import xyz_to_pointcloud2
@@ -185,6 +211,7 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
               for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))])
     bads = refused_on_arrival()
     topics = [f'pcrp_soak/object_{k}' for k in range(n_topics)]
+    use_driver_profile(driver_profile)
     nodes = _NodeProcesses(topics, processes, model_path, workers, reliable)
 
     rclpy.init()
@@ -218,8 +245,11 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
         )
         bad_cycle = list(bads.items())
         t0 = next_rss = time.monotonic()
-        tick = 0
+        tick = late = 0
         while time.monotonic() - t0 < duration:
+            # a tick sent half a period late is the driver's stall, not the node's: the clouds it
+            # owes then go out back to back, a burst no camera sends
+            late += time.monotonic() - (t0 + tick / rate) > 0.5 / rate
             for k, t in enumerate(topics):
                 header = Header(
                     stamp=client.get_clock().now().to_msg(), frame_id='camera_optical_frame'
@@ -294,6 +324,8 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     )
     result['processes'] = processes
     result['workers'] = workers
+    result['driver_late_ticks'] = late
+    result['driver_profile'] = Path(driver_profile).name if driver_profile else None
     return result
 
 
@@ -401,6 +433,9 @@ def register(sub) -> None:
     p.add_argument('--workers', type=int, default=1, help="the node's workers parameter")
     p.add_argument('--model', default=None)
     p.add_argument('--json', default=None, help='also write the figures to this JSON file')
+    p.add_argument('--driver-profile', default=None,
+                   help='Fast DDS profile the clouds are published with (default: Fast DDS '
+                        f'defaults; {LARGE_CLOUDS_PROFILE.name} for bursts of large clouds)')
     p.set_defaults(func=_soak)
 
 
@@ -414,6 +449,7 @@ def _soak(args) -> int:
         args.model,
         processes=args.processes,
         workers=args.workers,
+        driver_profile=args.driver_profile,
     )
     print(table(result))
     if args.json:
