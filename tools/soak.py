@@ -84,9 +84,11 @@ class _NodeProcesses:
     parameter.
     """
 
-    def __init__(self, topics, k: int, model_path, workers: int = 1, reliable: bool = False):
+    def __init__(self, topics, k: int, model_path, workers: int = 1, reliable: bool = False,
+                 params: dict | None = None):
         self.workers = workers
         self.reliable = reliable
+        self.params = dict(params or {})
         self.dir = Path(tempfile.mkdtemp(prefix='pcrp_soak_'))
         self.names = [NODE_NAME if k == 1 else f'{NODE_NAME}_{i}' for i in range(k)]
         self.share = {name: topics[i::k] for i, name in enumerate(self.names)}
@@ -105,6 +107,7 @@ class _NodeProcesses:
         if self.reliable:
             # the node's accounting alone: nothing lost on the way, as a reliable replay gives
             lines += ['    qos_reliability: reliable', '    qos_depth: 100']
+        lines += [f'    {k}: {v}' for k, v in self.params.items()]
         params.write_text('\n'.join(lines) + '\n')
         cmd = [
             sys.executable,
@@ -172,17 +175,17 @@ class _Diagnostics:
         return float(self.values.get(topic, {}).get(key, default))
 
 
-def camera_clouds(n: int) -> list[GoodCloud]:
+def camera_clouds(n: int, bag=None) -> list[GoodCloud]:
     """
-    Return the shipped demo bag's depth-camera views of the shipped gallery.
+    Return the first n depth-camera views of the shipped gallery in a bag (`pcrp make-bag`).
 
-    What the node meets when run as `make demo` runs it (thousands of points each, not a few
-    hundred).
+    By default the shipped demo bag's: what the node meets when run as `make demo` runs it
+    (thousands of points each, not a few hundred).
     """
     from pcrp_ros.bags import read_bag
     from pcrp_ros.demo import DEMO_BAG
 
-    clouds, truths, _ = read_bag(DEMO_BAG)
+    clouds, truths, _ = read_bag(DEMO_BAG if bag is None else bag)
     out = []
     for c in clouds[:n]:
         hdr = c['msg'].header
@@ -194,7 +197,8 @@ def camera_clouds(n: int) -> list[GoodCloud]:
 
 def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
         model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print,
-        workers: int = 1, reliable: bool = False, driver_profile: str | None = None) -> dict:
+        workers: int = 1, reliable: bool = False, driver_profile: str | None = None,
+        node_params: dict | None = None, bag=None) -> dict:
     from geometry_msgs.msg import PoseStamped
     from pcrp_core import PCRP
     from pcrp_ros.conversions import xyz_to_pointcloud2
@@ -206,13 +210,13 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
 
     model = PCRP.load(model_path)
     rng = np.random.default_rng(seed)
-    goods = (camera_clouds(16) if model_path is None else
+    goods = (camera_clouds(16, bag) if model_path is None else
              [good_cloud(model, seed=s, gallery_index=int(i))
               for s, i in enumerate(rng.choice(len(model.gallery_ids), 16, replace=False))])
     bads = refused_on_arrival()
     topics = [f'pcrp_soak/object_{k}' for k in range(n_topics)]
     use_driver_profile(driver_profile)
-    nodes = _NodeProcesses(topics, processes, model_path, workers, reliable)
+    nodes = _NodeProcesses(topics, processes, model_path, workers, reliable, node_params)
 
     rclpy.init()
     client = rclpy.create_node('pcrp_soak_driver')
@@ -433,6 +437,9 @@ def register(sub) -> None:
     p.add_argument('--workers', type=int, default=1, help="the node's workers parameter")
     p.add_argument('--model', default=None)
     p.add_argument('--json', default=None, help='also write the figures to this JSON file')
+    p.add_argument('--bag', default=None,
+                   help='camera views of the shipped gallery to publish (`pcrp make-bag`; '
+                        'default: the demo bag); with --model, views cut from its gallery')
     p.add_argument('--driver-profile', default=None,
                    help='Fast DDS profile the clouds are published with (default: Fast DDS '
                         f'defaults; {LARGE_CLOUDS_PROFILE.name} for bursts of large clouds)')
@@ -450,6 +457,7 @@ def _soak(args) -> int:
         processes=args.processes,
         workers=args.workers,
         driver_profile=args.driver_profile,
+        bag=args.bag,
     )
     print(table(result))
     if args.json:

@@ -18,7 +18,7 @@ The benchmark report says why a target is missed from its own run's figures.
 Not from numbers written into its prose.
 """
 
-from tools.bench import TARGETS, why_unmet
+from tools.bench import TARGETS, verdicts, why_unmet
 
 
 def _run(eight_under_5, eight_mean):
@@ -61,3 +61,19 @@ def test_no_reason_for_a_met_target():
     run = _run(0.52, 44.9)
     run['verdicts'][TARGETS[0][0]] = ('90 ms', True)
     assert why_unmet(run) == []
+
+
+def _node_row(topics, workers, age_p95, dropped, lost=0):
+    return {'topics': topics, 'workers': workers, 'age_p95_ms': age_p95, 'dropped': dropped,
+            'sent': 600, 'received': 600 - lost}
+
+
+def test_the_shipped_node_is_judged_with_a_worker_per_core_and_both_are_shown():
+    one = [_node_row(1, 1, 230, 12), _node_row(4, 1, 300, 0)]
+    two = [_node_row(1, 2, 160, 0), _node_row(4, 2, 210, 0)]
+    said, met = verdicts({'node_shipped': one + two})[TARGETS[4][0]]
+    assert met
+    assert '1 worker: p95 age 300 ms, 12 dropped' in said and '2 workers: p95 age 210 ms' in said
+    for spoilt in (_node_row(4, 2, 260, 0), _node_row(4, 2, 210, 1), _node_row(4, 2, 210, 0, 3)):
+        assert not verdicts({'node_shipped': one + two[:1] + [spoilt]})[TARGETS[4][0]][1]
+    assert not verdicts({'node_shipped': one})[TARGETS[4][0]][1]
