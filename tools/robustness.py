@@ -160,13 +160,13 @@ def run_cases(model) -> list[tuple]:
     from pcrp_ros.node import PcrpNode
     from pcrp_ros.spinning import ros_context, spinning
     import rclpy
-    from tools.bad_clouds import accepted, CaseRunner, CASES, good_cloud
+    from tools.bad_clouds import accepted, CaseRunner, CASES, judged_good_cloud
 
     rows = []
     with ros_context() as ctx:
         node = PcrpNode(model=model, context=ctx)
         client = rclpy.create_node('pcrp_robustness', context=ctx)
-        runner = CaseRunner(node, client, good_cloud(model))
+        runner = CaseRunner(node, client, judged_good_cloud(model))
         with spinning(ctx, node, client):
             if not runner.ready():
                 raise RuntimeError('the node did not answer a good cloud within a minute')
@@ -344,9 +344,8 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
             f"objects (the demo bag's camera views), published with {published_with} as "
             'docs/node.md advises a segmenter. Latency is from arrival to publication; age from '
             f"the cloud's stamp to publication. {_stale_share(soak):.0%} of the good clouds were "
-            'dropped as stale: one worker does not keep up with four topics at 10 Hz, and by '
-            'design the node then answers the newest clouds of each topic and never builds a '
-            'backlog.',
+            'dropped as stale: by design, a node that falls behind answers the newest clouds of '
+            'each topic and never builds a backlog.',
             '',
             soak_mod.table(soak),
             '',

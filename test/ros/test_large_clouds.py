@@ -44,7 +44,7 @@ pubs = [node.create_publisher(PointCloud2, f'/burst/object_{{k}}', QoSProfile(de
         for k in range({TOPICS})]
 while not all(p.get_subscription_count() for p in pubs):
     time.sleep(0.05)
-time.sleep(1.0)
+time.sleep(2.0)  # matching is not symmetric: let the subscriber see this publisher too
 cloud = xyz_to_pointcloud2(np.random.default_rng(0).normal(size=(20000, 3)), Header())
 for _ in range({BURSTS}):
     for p in pubs:
