@@ -121,7 +121,8 @@ class _NodeProcesses:
         ]
         # the node runs as it would without the driver's profile (see use_driver_profile)
         env = dict(os.environ)
-        if _driver_profile_in_use and env.get(PROFILE_VARIABLE) == _driver_profile_in_use[0]:
+        given = _driver_profile_in_use[0] if _driver_profile_in_use else None
+        if given and env.get(PROFILE_VARIABLE) == given:
             del env[PROFILE_VARIABLE]
         return subprocess.Popen(
             cmd, stdout=(self.dir / f'{name}.log').open('w'), stderr=subprocess.STDOUT, env=env
