@@ -221,12 +221,3 @@ def test_rejections_are_logged_once_per_reason_per_throttle_period(model):
             assert len(said) == 3 and '(empty, 3 so far)' in said[2]
         finally:
             node.destroy_node()
-
-
-def test_the_report_runs_its_catalogue_on_the_shipped_model():
-    # what `make robustness` runs first; its good cloud must be one the runner can judge right
-    # (the shipped model's first object, a can, is answered right only up to its symmetry)
-    from tools.robustness import run_cases
-    rows = run_cases(PCRP.load(None))
-    failed = [(case.name, out.outcome, out.next_good) for case, out, ok in rows if not ok]
-    assert rows and not failed, failed
