@@ -84,10 +84,8 @@ class _NodeProcesses:
     parameter.
     """
 
-    def __init__(self, topics, k: int, model_path, workers: int = 1, reliable: bool = False,
-                 params: dict | None = None):
+    def __init__(self, topics, k: int, model_path, workers: int = 1, params: dict | None = None):
         self.workers = workers
-        self.reliable = reliable
         self.params = dict(params or {})
         self.dir = Path(tempfile.mkdtemp(prefix='pcrp_soak_'))
         self.names = [NODE_NAME if k == 1 else f'{NODE_NAME}_{i}' for i in range(k)]
@@ -104,9 +102,6 @@ class _NodeProcesses:
         ]
         if model_path:
             lines.append(f"    model_path: '{model_path}'")
-        if self.reliable:
-            # the node's accounting alone: nothing lost on the way, as a reliable replay gives
-            lines += ['    qos_reliability: reliable', '    qos_depth: 100']
         lines += [f'    {k}: {v}' for k, v in self.params.items()]
         params.write_text('\n'.join(lines) + '\n')
         cmd = [
@@ -217,7 +212,11 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     bads = refused_on_arrival()
     topics = [f'pcrp_soak/object_{k}' for k in range(n_topics)]
     use_driver_profile(driver_profile)
-    nodes = _NodeProcesses(topics, processes, model_path, workers, reliable, node_params)
+    params = dict(node_params or {})
+    if reliable:
+        # the node's accounting alone: nothing lost on the way, as a reliable replay gives
+        params.update(qos_reliability='reliable', qos_depth=100)
+    nodes = _NodeProcesses(topics, processes, model_path, workers, params)
 
     rclpy.init()
     client = rclpy.create_node('pcrp_soak_driver')
