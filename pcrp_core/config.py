@@ -351,6 +351,14 @@ class InstanceOptions(Options):
     shortlist: int = setting(
         8, "Objects whose views have the query's shape that are looked at further.", low=1
     )
+    smaller_weight: float = setting(
+        0.5,
+        "Shortlist: weight of the query's being smaller than a view along an axis, against its "
+        'being larger (something in front of an object cuts its view down; nothing makes it '
+        'show more).',
+        low=0.0,
+        high=1.0,
+    )
     silhouette_poses: int = setting(
         16, '(view, roll) poses per object from the best-agreeing silhouettes.', low=1
     )
@@ -360,7 +368,7 @@ class InstanceOptions(Options):
     score_points: int = setting(48, 'Query points the hypotheses are ranked on.', low=8)
     poses_refined: int = setting(2, 'Best hypotheses per object refined by ICP.', low=1)
     objects_refined: int = setting(
-        5, 'Objects, best-ranked first, whose hypotheses are refined and judged.', low=1
+        7, 'Objects, best-ranked first, whose hypotheses are refined and judged.', low=1
     )
     coarse_ratio: float = setting(
         2.0,
