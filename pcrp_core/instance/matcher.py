@@ -90,21 +90,20 @@ class InstanceMatcher:
             )
         return self._surfaces[i]
 
-    def shortlist(self, shape: np.ndarray, n: int, exclude=(), smaller_weight: float = 1.0
-                  ) -> np.ndarray:
+    def shortlist(self, shape: np.ndarray, opts, exclude=()) -> np.ndarray:
         """
-        Return the indices of the n objects with a view nearest the query's shape.
+        Return the indices of the opts.shortlist objects with a view nearest the query's shape.
 
-        Nearest first. Along each axis a query smaller than the view counts smaller_weight times as
-        much as one larger: an occluder hides part of a view (a fifth to over half of it in the
-        robot report's occluded views), while a cloud larger than every view of an object is not
-        that object.
+        Nearest first. Along each axis a query smaller than the view counts opts.smaller_weight
+        times as much as one larger: an occluder hides part of a view (a fifth to over half of it
+        in the robot report's occluded views), while a cloud larger than every view of an object is
+        not that object.
         """
         d = shape - self.templates.shapes
-        d = np.where(d < 0, smaller_weight * d, d)
+        d = np.where(d < 0, opts.smaller_weight * d, d)
         nearest = np.linalg.norm(d, axis=2).min(axis=1)
         nearest[list(exclude)] = np.inf
-        return np.argsort(nearest)[: min(n, len(nearest) - len(exclude))]
+        return np.argsort(nearest)[: min(opts.shortlist, len(nearest) - len(exclude))]
 
     def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,
               exclude=()) -> Match:
@@ -130,8 +129,7 @@ class InstanceMatcher:
         ]
         clock.lap('description')
         ranked = []
-        for i in self.shortlist(shape_code(points), opts.shortlist, exclude,
-                                opts.smaller_weight):
+        for i in self.shortlist(shape_code(points), opts, exclude):
             if up is not None and up_object is not None:
                 R, t, v = hypotheses.upright(
                     view, up, up_object, tpl.cameras[i], tpl.view_centres[i], opts.yaw_steps

@@ -13,11 +13,15 @@
 # limitations under the License.
 
 """Known objects from a camera (pcrp_core/instance): each step on shapes whose answer is known."""
+from types import SimpleNamespace
+
 import numpy as np
 import open3d as o3d
 from pcrp_core.confidence import expected_calibration_error, fit_calibration, reliability
+from pcrp_core.config import InstanceOptions
 from pcrp_core.geometry import rotation_taking
 from pcrp_core.instance import hypotheses
+from pcrp_core.instance.matcher import InstanceMatcher
 from pcrp_core.instance.signatures import ray_frame, SECTORS, shift_costs, signature
 from pcrp_core.instance.templates import object_templates, stack, Templates, TemplateSettings
 from pcrp_core.instance.verification import (distances, judge, query_surface, Surface,
@@ -118,6 +122,18 @@ def test_the_true_pose_costs_less_than_a_slightly_wrong_one_and_a_smaller_brick(
         small, tpl.normals[0], __import__('scipy').spatial.cKDTree(small), float(tpl.spacing[0])
     )
     assert judge(query, surface_small, expected, R, t, 0.003).cost > 5 * right.cost
+
+
+def test_an_occluded_view_of_a_large_object_shortlists_it_before_a_small_one():
+    # per axis (log metres) the cloud is 0.3 smaller than the large object's only view and 0.2
+    # larger than the small one's: compared symmetrically the small one is nearer; an occluder
+    # can cut a view down, nothing makes it show more, so at half weight the large one is
+    large, small = np.log([0.20, 0.10, 0.05]), np.log([0.20, 0.10, 0.05]) - 0.5
+    matcher = InstanceMatcher(SimpleNamespace(shapes=np.stack([large, small])[:, None, :],
+                                              directions=None))
+    cloud = large - 0.3
+    assert matcher.shortlist(cloud, InstanceOptions(smaller_weight=1.0)).tolist() == [1, 0]
+    assert matcher.shortlist(cloud, InstanceOptions(smaller_weight=0.5)).tolist() == [0, 1]
 
 
 def test_distances_to_a_plane_do_not_count_the_sampling_gap():
