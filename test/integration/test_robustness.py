@@ -76,6 +76,30 @@ def test_degenerate_geometry_is_answered_or_refused(model, name, cloud):
     assert isinstance(out, str) or np.isfinite(out.transform).all()
 
 
+@pytest.mark.parametrize('seed', [0, 1])
+def test_screening_on_arrival_refuses_what_cleaning_does_and_keeps_the_answer(model, seed):
+    # what a stream screens as clouds arrive must be what estimate() would refuse, and the
+    # thinned cloud it queues must get the answer the whole cloud gets
+    rng = np.random.default_rng(seed)
+    big = generate_object('chair', seed).astype(float)
+    big = np.repeat(big, 6, axis=0) + rng.normal(0, 0.003, (6 * len(big), 3))
+    clouds = [big, big[:3], np.full((50, 3), np.nan), np.repeat(big[:2], 300, axis=0),
+              np.column_stack([np.linspace(0, 1, 500)] * 3), np.zeros((0, 3))]
+    for cloud in clouds:
+        try:
+            screened = model.screen(cloud)
+        except InvalidCloud as e:
+            with pytest.raises(InvalidCloud) as cleaned:
+                model.prepare(cloud)
+            assert cleaned.value.reason == e.reason
+            continue
+        assert len(screened) < len(cloud)   # the big cloud is thinned, not only checked
+        np.testing.assert_array_equal(model.prepare(screened), model.prepare(cloud))
+        a, b = model.estimate(screened), model.estimate(cloud)
+        assert a.gallery_id == b.gallery_id
+        np.testing.assert_allclose(a.transform, b.transform, atol=1e-6)
+
+
 def test_a_million_points_are_downsampled_and_answered_in_bounded_time(model):
     rng = np.random.default_rng(4)
     base = generate_object('sofa', 2, n_points=4096).astype(np.float64)
