@@ -27,6 +27,7 @@ from __future__ import annotations
 from collections import Counter
 import os
 from pathlib import Path
+import shutil
 import signal
 import subprocess
 import sys
@@ -328,6 +329,9 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     )
     result['processes'] = processes
     result['workers'] = workers
+    if result['passed']:   # the node logs are kept only to explain a failure
+        shutil.rmtree(nodes.dir, ignore_errors=True)
+        result['node_log'] = None
     result['driver_late_ticks'] = late
     result['driver_profile'] = Path(driver_profile).name if driver_profile else None
     return result
@@ -422,6 +426,8 @@ def table(result: dict) -> str:
     )
     rows.append('')
     rows += [f"- {'pass' if ok else 'FAIL'}: {name}" for name, ok in result['checks'].items()]
+    if result.get('node_log'):
+        rows += ['', f"The node's log: {result['node_log']}"]
     return '\n'.join(rows)
 
 

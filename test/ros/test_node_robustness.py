@@ -185,7 +185,8 @@ def test_a_short_soak_accounts_for_every_cloud(capsys):
     # effort loses whole 200 KB clouds on the way when a shared 2-core machine stalls
     result = run(duration=15.0, rate=5.0, n_topics=2, bad_share=0.3, reliable=True)
     failed = [name for name, ok in result['checks'].items() if not ok]
-    assert not failed, (failed, result['per_topic'])
+    assert not failed, (failed, result['per_topic'], result['node_log'])
+    assert result['node_log'] is None   # a run that passed leaves no logs behind
     for d in result['per_topic'].values():
         assert (
             d['sent_bad'] > 0
