@@ -32,9 +32,7 @@ import numpy as np
 from pcrp_core.errors import ModelError
 
 FORMAT = 'pcrp-model'
-FORMAT_VERSION = 2
-# version 1 models only lack what version 2 added (products in the view calibration): read both
-READABLE_VERSIONS = (1, 2)
+FORMAT_VERSION = 1
 META_FILE = 'model.json'
 ARRAYS_FILE = 'arrays.npz'
 
@@ -81,11 +79,10 @@ def read_model(path) -> tuple[dict, dict]:
             f'{meta_path}: not a pcrp model (format field is '
             f"{meta.get('format') if isinstance(meta, dict) else None!r})"
         )
-    if meta.get('format_version') not in READABLE_VERSIONS:
+    if meta.get('format_version') != FORMAT_VERSION:
         raise ModelError(
             f"{meta_path}: model format version {meta.get('format_version')!r}, "
-            f"this pcrp reads versions {', '.join(map(str, READABLE_VERSIONS))}; "
-            'rebuild the model with `pcrp build`'
+            f'this pcrp reads version {FORMAT_VERSION}; rebuild the model with `pcrp build`'
         )
     if _sha256(arrays_path) != meta.get('arrays_sha256'):
         raise ModelError(

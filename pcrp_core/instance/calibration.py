@@ -52,9 +52,6 @@ FEATURES = (
     'off_noise',
     'missing_noise',
 )
-# products of the features are learnt only from this many right and as many wrong answers: the
-# fewest they were measured to help with (a gallery of 10 objects; docs/method.md)
-INTERACTIONS_FROM = 200
 TWIN_RATIO = 1.4
 POSE_RIGHT = 0.1   # of the object's diameter, as ADD-S counts it
 
@@ -207,8 +204,5 @@ def calibrate(
     twins = find_twins(answered)
     X, y = labelled_samples(answered, twins)
     ids = model.gallery.ids
-    n_right = int(sum(y))
-    interactions = min(n_right, len(y) - n_right) >= INTERACTIONS_FROM
-    calibration = (fit_calibration(X, y, FEATURES, interactions=interactions)
-                   if 0 < n_right < len(y) else None)
+    calibration = fit_calibration(X, y, FEATURES) if 0 < sum(y) < len(y) else None
     return calibration, [[ids[i], ids[j]] for i, j in twins]

@@ -17,8 +17,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import open3d as o3d
-from pcrp_core.confidence import (Calibration, expected_calibration_error, fit_calibration,
-                                  reliability)
+from pcrp_core.confidence import expected_calibration_error, fit_calibration, reliability
 from pcrp_core.config import InstanceOptions
 from pcrp_core.geometry import rotation_taking
 from pcrp_core.instance import hypotheses
@@ -188,47 +187,6 @@ def test_a_calibration_is_as_right_as_it_says_on_data_drawn_from_it():
     assert all(abs(c - r) < 0.1 for c, r, n in reliability(p, right) if n > 100)
     with pytest.raises(ValueError, match='both right and wrong'):
         fit_calibration([{'x': 0.0}, {'x': 1.0}], [True, True], ('x',))
-
-
-def test_a_calibration_with_interactions_learns_what_no_linear_one_can():
-    # right when both pieces of evidence agree in sign: no line separates that, a product does
-    rng = np.random.default_rng(1)
-    a, b = rng.normal(size=(2, 3000))
-    right = rng.random(3000) < 1 / (1 + np.exp(-3.0 * a * b))
-    samples = [{'a': u, 'b': v} for u, v in zip(a, b)]
-    linear = fit_calibration(samples, right, ('a', 'b'))
-    products = fit_calibration(samples, right, ('a', 'b'), interactions=True)
-    p_linear = np.array([linear.probability(s) for s in samples])
-    p_products = np.array([products.probability(s) for s in samples])
-    assert expected_calibration_error(p_products, right) < 0.05
-    assert np.mean((p_products > 0.5) == right) > np.mean((p_linear > 0.5) == right) + 0.15
-
-
-def test_a_calibration_with_interactions_is_sklearns_polynomial_regression_stored_as_arrays():
-    from sklearn.linear_model import LogisticRegression
-    from sklearn.pipeline import make_pipeline
-    from sklearn.preprocessing import PolynomialFeatures, StandardScaler
-
-    rng = np.random.default_rng(2)
-    X = rng.normal(size=(500, 3)) * [1.0, 5.0, 0.1] + [0.0, 2.0, -1.0]
-    right = rng.random(500) < 1 / (1 + np.exp(-(X[:, 0] - X[:, 0] * X[:, 1] / 5.0)))
-    names = ('u', 'v', 'w')
-    cal = fit_calibration([dict(zip(names, x)) for x in X], right, names, interactions=True)
-    reference = make_pipeline(StandardScaler(), PolynomialFeatures(2), StandardScaler(),
-                              LogisticRegression(max_iter=5000)).fit(X, right)
-    stored = Calibration.from_arrays(cal.to_arrays('view_'), 'view_')
-    mine = [stored.probability(dict(zip(names, x))) for x in X[:50]]
-    np.testing.assert_allclose(mine, reference.predict_proba(X[:50])[:, 1], atol=1e-6)
-    # a feature that never varies carries nothing, and divides nothing by zero
-    X[:, 2] = 0.7
-    flat = fit_calibration([dict(zip(names, x)) for x in X], right, names, interactions=True)
-    assert 0.0 < flat.probability(dict(zip(names, X[0]))) < 1.0
-    # a model written before products were learnt has none, and answers as before
-    linear = fit_calibration([dict(zip(names, x)) for x in X], right, names)
-    assert 'view_pairs' not in linear.to_arrays('view_')
-    old = Calibration.from_arrays(linear.to_arrays('view_'), 'view_')
-    assert len(old.pairs) == 0 and old.probability(dict(zip(names, X[0]))) == pytest.approx(
-        linear.probability(dict(zip(names, X[0]))))
 
 
 def test_look_at_puts_the_target_on_the_optical_axis():
