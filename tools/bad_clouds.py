@@ -34,7 +34,8 @@ from pcrp_core.sources.views import random_rotation, sensor_view
 from pcrp_ros.conversions import FLOAT32, xyz_to_pointcloud2
 
 ANSWERED = 'answered'        # pose published, with the right gallery ID and a small rotation error
-# pose published; no ground truth to hold it to (units unknown to the model)
+# pose published, not the source object's (allowed only where there is none to hold it to: a
+# sphere, a cube)
 ANY_ANSWER = 'answered_any'
 
 
@@ -224,7 +225,9 @@ def _rejected(*reasons):
 
 
 _ANSWER = frozenset({ANSWERED})
-_UNITS = frozenset({ANY_ANSWER, 'rejected:low_confidence'})
+# a cloud in other units is answered right (a model of unknown scale) or refused as unsure, never
+# posed wrongly with confidence: no gallery object a metric model holds is a thousand times larger
+_UNITS = frozenset({ANSWERED, 'rejected:low_confidence'})
 _SHAPELESS = frozenset({ANY_ANSWER, 'rejected:low_confidence', 'rejected:degenerate'})
 
 CASES = [
