@@ -55,35 +55,33 @@ def farthest_point_sampling(points: np.ndarray, m: int) -> np.ndarray:
 
 def merge_duplicates(points: np.ndarray, resolution: float = 0.005) -> np.ndarray:
     """
-    One point per cell of `resolution` times the cloud's RMS radius, first come first kept.
+    Drop every point within `resolution` times the cloud's RMS radius of an earlier kept one.
 
-    Repeated points (merged cameras, drivers that pad clouds) bias the normals and features,
-    and sampling then picks copies instead of surface. The cell is relative to the cloud's
-    own size, so this works in any unit and never thins a normally spaced cloud.
+    Repeated points (merged cameras, drivers that pad clouds, a point repeated with sensor
+    jitter) bias the normals and features, and sampling then picks copies instead of surface.
+    The distance is relative to the cloud's own size, so this works in any unit and never thins
+    a normally spaced cloud. By distance rather than by grid cell: a grid splits a jittered
+    cluster wherever a cell border crosses it, leaving several copies, and merging again then
+    removes more (kept points here are all farther apart than the distance, so a second pass
+    keeps them all).
     """
     if len(points) < 2:
         return points
     radius = np.sqrt(((points - points.mean(axis=0)) ** 2).sum(axis=1).mean())
     if radius <= 0:
         return points[:1]
-    keys = np.floor((points - points.min(axis=0)) / (resolution * radius)).astype(np.int64)
-    return points[np.sort(_first_of_each_row(keys))]
-
-
-def _first_of_each_row(rows: np.ndarray) -> np.ndarray:
-    """
-    Index of the first occurrence of each distinct row of a non-negative integer array.
-
-    As np.unique(rows, axis=0, return_index=True), a tenth of its cost: rows are folded into
-    one integer where they fit (a node screens every arriving cloud with this).
-    """
-    span = rows.max(axis=0) + 1
-    if np.prod(span.astype(float)) >= 2.0 ** 62:
-        return np.unique(rows, axis=0, return_index=True)[1]
-    folded = np.zeros(len(rows), dtype=np.int64)
-    for column, size in zip(rows.T, span):
-        folded = folded * size + column
-    return np.unique(folded, return_index=True)[1]
+    pairs = cKDTree(points).query_pairs(resolution * radius, output_type='ndarray')
+    if len(pairs) == 0:
+        return points
+    # first come first kept: walk the points that have later neighbours in order (few, in a
+    # normally spaced cloud); a kept one drops its later neighbours, a dropped one drops none
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    bounds = np.searchsorted(pairs[:, 0], np.arange(len(points) + 1))
+    dropped = np.zeros(len(points), dtype=bool)
+    for i in np.unique(pairs[:, 0]):
+        if not dropped[i]:
+            dropped[pairs[bounds[i]:bounds[i + 1], 1]] = True
+    return points[~dropped]
 
 
 def subsample(points: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
