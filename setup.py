@@ -49,6 +49,7 @@ setup(
         'scipy>=1.12',
         'scikit-learn>=1.4',
         'joblib>=1.3',
+        'threadpoolctl>=3.1',
         'tqdm>=4.66',
         'open3d>=0.19',
         'rosbags>=0.11',

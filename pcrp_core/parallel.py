@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import os
 
+from pcrp_core.threads import one_open3d_thread
+
 
 def default_jobs() -> int:
     return (
@@ -36,7 +38,9 @@ def default_jobs() -> int:
 
 
 def _chunk(fn, state, items):
-    return [fn(state, x) for x in items]
+    # Open3D on one thread: a model's parts come out the same whatever the cores (threads.py)
+    with one_open3d_thread():
+        return [fn(state, x) for x in items]
 
 
 def parallel_map(
@@ -57,7 +61,8 @@ def parallel_map(
     wrap = progress or (lambda it, **_: it)
     n_jobs = default_jobs() if n_jobs is None else max(1, n_jobs)
     if n_jobs == 1 or len(items) < 2 * chunksize:
-        return [fn(state, x) for x in wrap(items, desc=desc, unit='obj')]
+        with one_open3d_thread():
+            return [fn(state, x) for x in wrap(items, desc=desc, unit='obj')]
     from joblib import delayed, Parallel
     chunks = [items[i:i + chunksize] for i in range(0, len(items), chunksize)]
     results = Parallel(n_jobs=n_jobs, backend='loky', return_as='generator')(

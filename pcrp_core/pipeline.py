@@ -39,6 +39,7 @@ from pcrp_core.instance.templates import Templates
 from pcrp_core.preprocess import clean, screen
 from pcrp_core.result import PoseResult
 from pcrp_core.retrieval import describe, PreparedCache
+from pcrp_core.threads import threads_from_environment
 from pcrp_core.vlad import VLAD
 
 DEFAULT_MODEL = Path(__file__).parent / 'data' / 'default_model'
@@ -73,6 +74,8 @@ class PCRP:
         view_calibration: Calibration | None = None,
         category_calibration: Calibration | None = None,
     ):
+        # a process told OMP_NUM_THREADS=1 (a worker, a benchmark) means Open3D too (threads.py)
+        threads_from_environment()
         self.pointhop, self.vlad, self.gallery = pointhop, vlad, gallery
         self.templates, self.view_calibration = templates, view_calibration
         # the confidence of answers by retrieval and registration (category/calibration.py)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 from sklearn.cluster import KMeans
+from threadpoolctl import threadpool_limits   # scikit-learn's own dependency
 
 AGGREGATIONS = ('vlad', 'max')
 
@@ -48,7 +49,10 @@ class VLAD:
         rng = np.random.default_rng(self.random_state)
         if len(features) > self.fit_points:
             features = features[rng.choice(len(features), self.fit_points, replace=False)]
-        km = KMeans(self.n_clusters, n_init=3, random_state=self.random_state).fit(features)
+        # one thread: k-means' threads add their partial sums in the order they finish, so the
+        # codebook (and every vector after it) changed from build to build
+        with threadpool_limits(1, user_api='openmp'):
+            km = KMeans(self.n_clusters, n_init=3, random_state=self.random_state).fit(features)
         self.codebook_ = km.cluster_centers_.astype(np.float32)
         return self
 

@@ -39,6 +39,7 @@ PYTHON_DEPENDENCIES = {
     'scipy': ('python3-scipy', 'scipy'),
     'sklearn': ('python3-sklearn', 'scikit-learn'),
     'joblib': ('python3-joblib', 'joblib'),
+    'threadpoolctl': ('python3-threadpoolctl', 'threadpoolctl'),
     'tqdm': ('python3-tqdm', 'tqdm'),
     'open3d': ('python3-open3d-pip', 'open3d'),
     'rosbags': ('python3-rosbags-pip', 'rosbags'),
