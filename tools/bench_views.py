@@ -57,9 +57,16 @@ def _rss_mb() -> float:
 
 
 def ycb_model(ycb: Path, cache: Path) -> tuple[str, dict]:
-    """Return the YCB model built as the README says (cached), and what building it cost."""
-    path = cache / 'ycb'
-    info = cache / 'ycb_build.json'
+    """
+    Return the YCB model built as the README says, and what building it cost.
+
+    Cached under the code that builds it (as the robot report's models): a model kept from
+    older code would time today's queries on yesterday's gallery.
+    """
+    from tools.robot_report import code_key
+
+    path = cache / f'ycb_{code_key()}'
+    info = cache / f'ycb_{code_key()}_build.json'
     if not (path / 'model.json').exists() or not info.exists():
         t0 = time.perf_counter()
         subprocess.run(
