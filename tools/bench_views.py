@@ -65,8 +65,8 @@ def ycb_model(ycb: Path, cache: Path) -> tuple[str, dict]:
     """
     from tools.robot_report import code_key
 
-    path = cache / f'ycb_{code_key()}'
-    info = cache / f'ycb_{code_key()}_build.json'
+    name = f'ycb_{code_key()}'
+    path, info = cache / name, cache / f'{name}_build.json'
     if not (path / 'model.json').exists() or not info.exists():
         t0 = time.perf_counter()
         subprocess.run(
