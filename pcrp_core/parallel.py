@@ -61,8 +61,7 @@ def parallel_map(
     wrap = progress or (lambda it, **_: it)
     n_jobs = default_jobs() if n_jobs is None else max(1, n_jobs)
     if n_jobs == 1 or len(items) < 2 * chunksize:
-        with one_open3d_thread():
-            return [fn(state, x) for x in wrap(items, desc=desc, unit='obj')]
+        return _chunk(fn, state, wrap(items, desc=desc, unit='obj'))
     from joblib import delayed, Parallel
     chunks = [items[i:i + chunksize] for i in range(0, len(items), chunksize)]
     results = Parallel(n_jobs=n_jobs, backend='loky', return_as='generator')(
