@@ -30,7 +30,7 @@ import os
 def _limit(n: int) -> None:
     import open3d as o3d
 
-    # Open3D before 0.20 ran on OpenMP, which reads OMP_NUM_THREADS itself
+    # an Open3D without the setting (0.20 has it) is left as it is
     setter = getattr(o3d.utility, 'set_max_threads', None)
     if setter is not None:
         setter(n)
