@@ -26,7 +26,6 @@ DEMO_BAG = Path(__file__).resolve().parent / 'data' / 'demo_bag'
 def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     import rclpy
     from geometry_msgs.msg import PoseStamped
-    from rclpy.executors import MultiThreadedExecutor
     from rclpy.parameter import Parameter
     from scipy.spatial.transform import Rotation
     from std_msgs.msg import String
@@ -35,6 +34,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     from pcrp_ros.bag_commands import answer_quality, format_row, HEADER, replay, summary
     from pcrp_ros.bags import read_bag
     from pcrp_ros.node import PcrpNode
+    from pcrp_ros.spinning import node_executor
 
     bag = bag or str(DEMO_BAG)
     _, truths, _ = read_bag(bag)
@@ -83,7 +83,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
 
     client.create_subscription(String, '/segmented_object/gallery_id', on_id, 10)
     client.create_subscription(PoseStamped, '/segmented_object/pose', on_pose, 10)
-    ex = MultiThreadedExecutor(num_threads=3)
+    ex = node_executor()
     ex.add_node(node)
     ex.add_node(client)
     spin = threading.Thread(target=ex.spin, daemon=True)

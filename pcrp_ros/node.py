@@ -29,10 +29,11 @@ import sys
 
 from pcrp_core import ModelError
 from pcrp_ros.answering import CloudAnswerer
+from pcrp_ros.spinning import node_executor
 from pcrp_ros.workers import WorkerStartError
 import rclpy
 from rclpy.exceptions import NameValidationException, ParameterException
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 # what stops a node at start-up with one line: a broken model, a mistyped parameter or topic
@@ -77,9 +78,9 @@ def run(make_node, program: str, args=None) -> int:
         faulthandler.register(signal.SIGUSR1, all_threads=True)
     rclpy.init(args=args)
     # The executor exists before the node says it is listening: a Ctrl-C that lands while an
-    # executor is being built leaves a half-made object whose __del__ prints a traceback. Two
+    # executor is being built leaves a half-made object whose __del__ prints a traceback. Several
     # threads: ~/reload_model waits for the new model while clouds keep arriving.
-    executor = MultiThreadedExecutor(num_threads=2)
+    executor = node_executor()
     node = None
     try:
         node = make_node()

@@ -13,9 +13,10 @@
 # limitations under the License.
 
 """
-Spin a node (or several) on an executor thread of this process, in a context of their own.
+The executor pcrp nodes spin on, and spinning them on a thread of this process.
 
-This is how tests, the demo and the robustness report run the node next to a client.
+`pcrp_node` spins on node_executor(); tests, the demo and the robustness report spin the node
+next to a client with spinning(), in a context of their own.
 """
 from __future__ import annotations
 
@@ -25,6 +26,21 @@ import time
 
 import rclpy
 from rclpy.executors import MultiThreadedExecutor
+
+
+# Threads for the callbacks of the nodes an executor spins. Jazzy's rclpy (7.1) hands a callback
+# to its thread pool and, until a pool thread starts it, yields it again on every pass of a loop
+# that holds the GIL (ros2/rclpy#1452, fixed in rclpy 10). With two threads and four topics, a
+# burst of four clouds left two callbacks waiting while the loop spun ~700 times a second, and the
+# screening of the other two took 40-50 ms instead of 5. A thread for every callback that can run
+# at once (one group per input topic, the reload service, the diagnostics timer, the lifecycle
+# services) leaves none waiting; Python starts pool threads only when they are needed.
+CALLBACK_THREADS = 16
+
+
+def node_executor(context=None) -> MultiThreadedExecutor:
+    """Return the executor to spin pcrp nodes on (see CALLBACK_THREADS)."""
+    return MultiThreadedExecutor(num_threads=CALLBACK_THREADS, context=context)
 
 
 @contextmanager
@@ -40,7 +56,7 @@ def ros_context():
 @contextmanager
 def spinning(ctx, *nodes):
     """Spin the nodes until the block ends, then destroy them."""
-    ex = MultiThreadedExecutor(num_threads=2, context=ctx)
+    ex = node_executor(ctx)
     for n in nodes:
         ex.add_node(n)
     thread = threading.Thread(target=ex.spin, daemon=True)
