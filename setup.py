@@ -41,8 +41,9 @@ setup(
     ],
     # lower bounds: the oldest versions the core, bag and CLI tests pass with (checked by
     # `python -m tools.lower_bounds`): scipy 1.12 for Rotation.align_vectors' least turn between
-    # two single vectors, open3d 0.19 for farthest_point_down_sample's start index, rosbags 0.11
-    # for StoragePlugin; the others are what Ubuntu Noble (ROS 2 Jazzy's platform) ships
+    # two single vectors, open3d 0.20 for utility.set_max_threads (pcrp_core/threads.py holds
+    # Open3D to one thread with it, which repeatable builds need), rosbags 0.11 for
+    # StoragePlugin; the others are what Ubuntu Noble (ROS 2 Jazzy's platform) ships
     install_requires=[
         'setuptools',
         'numpy>=1.26',
@@ -51,7 +52,7 @@ setup(
         'joblib>=1.3',
         'threadpoolctl>=3.1',
         'tqdm>=4.66',
-        'open3d>=0.19',
+        'open3d>=0.20',
         'rosbags>=0.11',
     ],
     extras_require={'test': ['pytest', 'hypothesis']},
