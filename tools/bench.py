@@ -308,11 +308,13 @@ def bench_scale(data: Path, sizes, seed: int, n_queries: int = 20, progress=prin
     Return retrieval time and model size against galleries of all 40 categories.
 
     The galleries are drawn from the train split of all 40 categories (the largest is all of it,
-    9,843 objects). Models are cached: building the largest takes a while.
+    9,843 objects). Models are cached under the code that builds them, as the YCB model is:
+    building the largest takes a while.
     """
     from pcrp_core import PCRP
     from pcrp_core.model_io import model_size
     from pcrp_core.sources import GalleryObject
+    from tools.robot_report import code_key
 
     archives = sorted(data.glob('*.npz'))
     everything = []
@@ -324,16 +326,19 @@ def bench_scale(data: Path, sizes, seed: int, n_queries: int = 20, progress=prin
     rng = np.random.default_rng(seed)
     queries = query_set(data, n_queries, 1024, seed)
     rows = []
+    key = code_key()
     for size in sizes:
         size = min(size, len(everything))
-        path = CACHE / f'gallery_{size}_seed{seed}'
+        path = CACHE / f'gallery_{size}_seed{seed}_{key}'
         built = None
+        # drawn whether or not the gallery is cached, so each size gets the same objects
+        # however many of the others were built already
+        pick = (
+            np.sort(rng.choice(len(everything), size, replace=False))
+            if size < len(everything)
+            else range(size)
+        )
         if not (path / 'model.json').exists():
-            pick = (
-                np.sort(rng.choice(len(everything), size, replace=False))
-                if size < len(everything)
-                else range(size)
-            )
             objs = [
                 GalleryObject(everything[i][0], everything[i][1], everything[i][2]) for i in pick
             ]
