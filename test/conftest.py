@@ -13,6 +13,8 @@
 # limitations under the License.
 
 """Session-wide fixtures: one small real gallery model, built once for the whole suite."""
+import faulthandler
+import os
 from pathlib import Path
 import sys
 from types import SimpleNamespace
@@ -23,6 +25,11 @@ sys.path.insert(0, str(Path(__file__).parent))
 from helpers import MODELNET, modelnet  # noqa: E402,I100
 
 GROUPS = ('unit', 'integration', 'ros', 'tools')
+
+# A test that hangs (a crashed child a pool waits on for ever, say) ends the run with every
+# thread's traceback rather than holding CI to its time limit. The slowest test takes ~2 min.
+HANG_SECONDS = 600
+HANG_REPORT = pytest.StashKey[object]()
 
 
 def pytest_collection_modifyitems(items):
@@ -35,6 +42,20 @@ def pytest_collection_modifyitems(items):
         group = Path(str(item.fspath)).parent.name
         if group in GROUPS:
             item.add_marker(getattr(pytest.mark, group))
+
+
+def pytest_configure(config):
+    # The tracebacks must reach the terminal: during a test pytest captures file descriptor 2,
+    # and what it captured is lost when the process exits. Capture is off here.
+    config.stash[HANG_REPORT] = os.fdopen(os.dup(2), 'w')
+
+
+@pytest.fixture(autouse=True)
+def end_run_on_hang(pytestconfig):
+    report = pytestconfig.stash[HANG_REPORT]
+    faulthandler.dump_traceback_later(HANG_SECONDS, exit=True, file=report)
+    yield
+    faulthandler.cancel_dump_traceback_later()
 
 
 @pytest.fixture(scope='session')
