@@ -396,7 +396,9 @@ def run(s: Settings) -> dict:
         timed('partial_views', run_pose, s, views4,
               [('view', 'uniform', 'view', pose_table.ROBOT_VIEW_METHODS)])
     if 'instances' in s.experiments:
-        instances = built('instances4', PAPER_CATEGORIES, None, split='test', views=VIEWS)
+        # the gallery holds every test object; a quick run's, those its queries come from
+        instances = built('instances4' + suffix, PAPER_CATEGORIES, s.build_limit, split='test',
+                          views=VIEWS)
         timed('instances', run_instances, s, instances)
     if 'large' in s.experiments:
         from pcrp_core.sources.modelnet import modelnet_categories
