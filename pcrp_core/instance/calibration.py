@@ -51,6 +51,7 @@ FEATURES = (
     'log_points',
     'off_noise',
     'missing_noise',
+    'shape_gap',
 )
 TWIN_RATIO = 1.4
 POSE_RIGHT = 0.1   # of the object's diameter, as ADD-S counts it
@@ -76,6 +77,7 @@ def features(match, n_points: int) -> dict:
         'log_points': float(np.log(max(n_points, 1))),
         'off_noise': best.median_off / noise,
         'missing_noise': best.median_missing / noise,
+        'shape_gap': match.shape_gap,
     }
 
 

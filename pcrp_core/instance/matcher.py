@@ -60,6 +60,9 @@ class Match:
     tau: float
     noise: float
     coarse: list = field(default_factory=list)   # (coarse cost, object index), best first
+    # how far the cloud's shape is from the answer's nearest view (shape_gaps): an object the
+    # gallery lacks is often answered by one of another size
+    shape_gap: float = 0.0
 
 
 class InstanceMatcher:
@@ -90,18 +93,22 @@ class InstanceMatcher:
             )
         return self._surfaces[i]
 
-    def shortlist(self, shape: np.ndarray, opts, exclude=()) -> np.ndarray:
+    def shape_gaps(self, shape: np.ndarray, opts) -> np.ndarray:
         """
-        Return the indices of the opts.shortlist objects with a view nearest the query's shape.
+        Return, per object, how far the query's shape (shape_code) is from its nearest view.
 
-        Nearest first. Along each axis a query smaller than the view counts opts.smaller_weight
-        times as much as one larger: an occluder hides part of a view (a fifth to over half of it
-        in the robot report's occluded views), while a cloud larger than every view of an object is
-        not that object.
+        Along each axis a query smaller than the view counts opts.smaller_weight times as much as
+        one larger: an occluder hides part of a view (a fifth to over half of it in the robot
+        report's occluded views), while a cloud larger than every view of an object is not that
+        object.
         """
         d = shape - self.templates.shapes
         d = np.where(d < 0, opts.smaller_weight * d, d)
-        nearest = np.linalg.norm(d, axis=2).min(axis=1)
+        return np.linalg.norm(d, axis=2).min(axis=1)
+
+    def shortlist(self, shape: np.ndarray, opts, exclude=()) -> np.ndarray:
+        """Return the opts.shortlist objects nearest the query's shape, nearest first."""
+        nearest = self.shape_gaps(shape, opts)
         nearest[list(exclude)] = np.inf
         return np.argsort(nearest)[: min(opts.shortlist, len(nearest) - len(exclude))]
 
@@ -129,7 +136,9 @@ class InstanceMatcher:
         ]
         clock.lap('description')
         ranked = []
-        for i in self.shortlist(shape_code(points), opts, exclude):
+        shape = shape_code(points)
+        gaps = self.shape_gaps(shape, opts)
+        for i in self.shortlist(shape, opts, exclude):
             if up is not None and up_object is not None:
                 R, t, v = hypotheses.upright(
                     view, up, up_object, tpl.cameras[i], tpl.view_centres[i], opts.yaw_steps
@@ -170,4 +179,5 @@ class InstanceMatcher:
                     best_of[i] = Candidate(i, R, t, fit)
                 clock.lap('verification')
         order = sorted(best_of.values(), key=lambda c: c.fit.cost)
-        return Match(order[0], order[1:], tau, noise, [(c, i) for c, i, _, _ in ranked])
+        return Match(order[0], order[1:], tau, noise, [(c, i) for c, i, _, _ in ranked],
+                     float(gaps[order[0].index]))

@@ -136,6 +136,17 @@ def test_an_occluded_view_of_a_large_object_shortlists_it_before_a_small_one():
     assert matcher.shortlist(cloud, InstanceOptions(smaller_weight=0.5)).tolist() == [0, 1]
 
 
+def test_the_shape_gap_is_how_far_a_cloud_is_from_each_objects_nearest_view():
+    # the confidence weighs it: an object the gallery lacks is often answered by one of another
+    # size; a cloud smaller than a view counts smaller_weight times (an occluder cuts views down)
+    view = np.log([0.20, 0.10, 0.05])
+    shapes = np.stack([[view, view + 1.0], [view - 0.5, view - 2.0]])
+    matcher = InstanceMatcher(SimpleNamespace(shapes=shapes, directions=None))
+    opts = InstanceOptions(smaller_weight=0.5)
+    assert np.allclose(matcher.shape_gaps(view, opts), [0.0, 0.5 * np.sqrt(3)])
+    assert np.allclose(matcher.shape_gaps(view - 0.5, opts), [0.25 * np.sqrt(3), 0.0])
+
+
 def test_distances_to_a_plane_do_not_count_the_sampling_gap():
     grid = np.stack(
         np.meshgrid(np.arange(0, 0.1, 0.01), np.arange(0, 0.1, 0.01), [0.0]), -1
