@@ -167,7 +167,8 @@ def growth(model_path: str, ycb: Path, queries: int, seed: int = 0) -> dict:
             matcher.match(c, model.instance_options, rng=np.random.default_rng(0), timings=timings)
             t_all.append(time.perf_counter() - t0)
             t0 = time.perf_counter()
-            matcher.shortlist(np.log(np.ones(3) * 0.03), model.instance_options)
+            opts = model.instance_options
+            matcher.shortlist(matcher.shape_gaps(np.log(np.ones(3) * 0.03), opts), opts)
             t_short.append(time.perf_counter() - t0)
         sizes.append({'objects': n, 'match': _pct(t_all), 'shortlist': _pct(t_short),
                       'template_mb': per_object * n / 1e6})

@@ -59,10 +59,10 @@ class Match:
     others: list[Candidate]
     tau: float
     noise: float
-    coarse: list = field(default_factory=list)   # (coarse cost, object index), best first
     # how far the cloud's shape is from the answer's nearest view (shape_gaps): an object the
     # gallery lacks is often answered by one of another size
-    shape_gap: float = 0.0
+    shape_gap: float
+    coarse: list = field(default_factory=list)   # (coarse cost, object index), best first
 
 
 class InstanceMatcher:
@@ -106,9 +106,9 @@ class InstanceMatcher:
         d = np.where(d < 0, opts.smaller_weight * d, d)
         return np.linalg.norm(d, axis=2).min(axis=1)
 
-    def shortlist(self, shape: np.ndarray, opts, exclude=()) -> np.ndarray:
-        """Return the opts.shortlist objects nearest the query's shape, nearest first."""
-        nearest = self.shape_gaps(shape, opts)
+    def shortlist(self, gaps: np.ndarray, opts, exclude=()) -> np.ndarray:
+        """Return the opts.shortlist objects of smallest shape_gaps, nearest first."""
+        nearest = gaps.copy()
         nearest[list(exclude)] = np.inf
         return np.argsort(nearest)[: min(opts.shortlist, len(nearest) - len(exclude))]
 
@@ -136,9 +136,8 @@ class InstanceMatcher:
         ]
         clock.lap('description')
         ranked = []
-        shape = shape_code(points)
-        gaps = self.shape_gaps(shape, opts)
-        for i in self.shortlist(shape, opts, exclude):
+        gaps = self.shape_gaps(shape_code(points), opts)
+        for i in self.shortlist(gaps, opts, exclude):
             if up is not None and up_object is not None:
                 R, t, v = hypotheses.upright(
                     view, up, up_object, tpl.cameras[i], tpl.view_centres[i], opts.yaw_steps
@@ -179,5 +178,5 @@ class InstanceMatcher:
                     best_of[i] = Candidate(i, R, t, fit)
                 clock.lap('verification')
         order = sorted(best_of.values(), key=lambda c: c.fit.cost)
-        return Match(order[0], order[1:], tau, noise, [(c, i) for c, i, _, _ in ranked],
-                     float(gaps[order[0].index]))
+        return Match(order[0], order[1:], tau, noise, float(gaps[order[0].index]),
+                     [(c, i) for c, i, _, _ in ranked])

@@ -132,8 +132,9 @@ def test_an_occluded_view_of_a_large_object_shortlists_it_before_a_small_one():
     matcher = InstanceMatcher(SimpleNamespace(shapes=np.stack([large, small])[:, None, :],
                                               directions=None))
     cloud = large - 0.3
-    assert matcher.shortlist(cloud, InstanceOptions(smaller_weight=1.0)).tolist() == [1, 0]
-    assert matcher.shortlist(cloud, InstanceOptions(smaller_weight=0.5)).tolist() == [0, 1]
+    even, half = InstanceOptions(smaller_weight=1.0), InstanceOptions(smaller_weight=0.5)
+    assert matcher.shortlist(matcher.shape_gaps(cloud, even), even).tolist() == [1, 0]
+    assert matcher.shortlist(matcher.shape_gaps(cloud, half), half).tolist() == [0, 1]
 
 
 def test_the_shape_gap_is_how_far_a_cloud_is_from_each_objects_nearest_view():
