@@ -56,10 +56,10 @@ class Settings:
                  experiments=EXPERIMENTS, progress=None, log=print):
         self.data, self.out, self.seed = Path(data), Path(out), seed
         self.quick = quick
-        self.per_category = per_category if per_category is not None else (3 if quick else None)
-        self.build_limit = 30 if quick else None  # train objects per category in the models
+        self.per_category = per_category if per_category is not None else (2 if quick else None)
+        self.build_limit = 16 if quick else None  # train objects per category in the models
         self.large_limit = 4 if quick else None
-        self.rejection_per_category = 3 if quick else min(self.per_category or 100, 30)
+        self.rejection_per_category = 2 if quick else min(self.per_category or 100, 30)
         self.jobs, self.progress, self.log = jobs, progress, log
         self.cache = Path(cache) if cache else Path.home() / '.cache' / 'pcrp' / 'eval'
         self.experiments = tuple(experiments)
@@ -306,7 +306,7 @@ def run_confidence(s: Settings, model_path) -> dict:
     Others: of twelve categories it lacks; whole and one-sided (confidence_table.py).
     """
     n_in, n_out = (
-        (3, 1) if s.quick else (min(s.per_category or 100, 25), min(s.per_category or 100, 10))
+        (2, 1) if s.quick else (min(s.per_category or 100, 25), min(s.per_category or 100, 10))
     )
     qs = []
     for cut in (None, 'view'):
