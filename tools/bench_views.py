@@ -148,6 +148,7 @@ def growth(model_path: str, ycb: Path, queries: int, seed: int = 0) -> dict:
     """Seconds per view against gallery size and cloud size, and the memory the templates take."""
     from pcrp_core import PCRP
     from pcrp_core.evaluation.scenes import sample_scene
+    from pcrp_core.instance.templates import shape_code
     from pcrp_core.sources.camera import Mesh
 
     model = PCRP.load(model_path)
@@ -168,7 +169,7 @@ def growth(model_path: str, ycb: Path, queries: int, seed: int = 0) -> dict:
             t_all.append(time.perf_counter() - t0)
             t0 = time.perf_counter()
             opts = model.instance_options
-            matcher.shortlist(matcher.shape_gaps(np.log(np.ones(3) * 0.03), opts), opts)
+            matcher.shortlist(shape_code(c), opts)
             t_short.append(time.perf_counter() - t0)
         sizes.append({'objects': n, 'match': _pct(t_all), 'shortlist': _pct(t_short),
                       'template_mb': per_object * n / 1e6})

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from pcrp_core.instance import hypotheses
+from pcrp_core.instance.shape_index import ShapeIndex
 from pcrp_core.instance.templates import shape_code, Templates
 from pcrp_core.instance.verification import Fit, judge, query_surface, Surface, visible_points
 from pcrp_core.registration.icp import icp_point_to_plane
@@ -71,6 +72,7 @@ class InstanceMatcher:
     def __init__(self, templates: Templates):
         self.templates = templates
         self.directions = templates.directions
+        self.shapes = ShapeIndex(templates.shapes)
         # each object's tree and Open3D cloud, made when it is first shortlisted: a large gallery
         # loads at once, and only the objects a stream meets take memory
         self._surfaces: dict[int, tuple[Surface, object]] = {}
@@ -102,15 +104,11 @@ class InstanceMatcher:
         report's occluded views), while a cloud larger than every view of an object is not that
         object.
         """
-        d = shape - self.templates.shapes
-        d = np.where(d < 0, opts.smaller_weight * d, d)
-        return np.linalg.norm(d, axis=2).min(axis=1)
+        return self.shapes.gaps(shape, opts.smaller_weight)
 
-    def shortlist(self, gaps: np.ndarray, opts, exclude=()) -> np.ndarray:
+    def shortlist(self, shape: np.ndarray, opts, exclude=()) -> np.ndarray:
         """Return the opts.shortlist objects of smallest shape_gaps, nearest first."""
-        nearest = gaps.copy()
-        nearest[list(exclude)] = np.inf
-        return np.argsort(nearest)[: min(opts.shortlist, len(nearest) - len(exclude))]
+        return self.shapes.nearest(shape, opts.shortlist, opts.smaller_weight, exclude)[0]
 
     def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,
               exclude=()) -> Match:
@@ -136,8 +134,8 @@ class InstanceMatcher:
         ]
         clock.lap('description')
         ranked = []
-        gaps = self.shape_gaps(shape_code(points), opts)
-        for i in self.shortlist(gaps, opts, exclude):
+        shape = shape_code(points)
+        for i in self.shortlist(shape, opts, exclude):
             if up is not None and up_object is not None:
                 R, t, v = hypotheses.upright(
                     view, up, up_object, tpl.cameras[i], tpl.view_centres[i], opts.yaw_steps
@@ -178,5 +176,6 @@ class InstanceMatcher:
                     best_of[i] = Candidate(i, R, t, fit)
                 clock.lap('verification')
         order = sorted(best_of.values(), key=lambda c: c.fit.cost)
-        return Match(order[0], order[1:], tau, noise, float(gaps[order[0].index]),
+        gap = self.shapes.gaps(shape, opts.smaller_weight, [order[0].index])[0]
+        return Match(order[0], order[1:], tau, noise, float(gap),
                      [(c, i) for c, i, _, _ in ranked])
