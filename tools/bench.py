@@ -37,6 +37,7 @@ import tempfile
 import time
 
 import numpy as np
+from tools.bench_plots import GROWTH_PLOT, growth_plot, slope
 from tools.process_memory import tree_rss_mb
 from tools.soak import LARGE_CLOUDS_PROFILE
 
@@ -478,7 +479,7 @@ def _fmt_ms(d) -> str:
     return f"{d['median_ms']:.0f} / {d['p95_ms']:.0f}"
 
 
-def report(res: dict, command: str) -> str:
+def report(res: dict, command: str, out_dir=None) -> str:
     m = res['machine']
     L = [
         '# Benchmarks: speed, memory and scale',
@@ -576,7 +577,17 @@ def report(res: dict, command: str) -> str:
             f"{r['search']['p95_ms']:.2f} | {r['bytes'] / 1e6:.1f} MB | {r['parts']} |"
             for r in res['scale']
         ]
-        L += ['']
+        L += [''] + _scale_growth(res['scale'])
+    if out_dir is not None and (Path(out_dir) / GROWTH_PLOT).exists():
+        L += [
+            '## How the cost grows, plotted',
+            '',
+            'Median times above against the gallery and the cloud, log-log, each series with '
+            'its fitted slope (0: flat, 1: linear):',
+            '',
+            f'![How the cost grows]({GROWTH_PLOT})',
+            '',
+        ]
     if res.get('node'):
         L += [
             '## The node under load, over DDS on loopback',
@@ -602,6 +613,29 @@ def report(res: dict, command: str) -> str:
         L += ['', _driver_note(res['node']), '']
     L += res.get('notes', [])
     return '\n'.join(L) + '\n'
+
+
+def _scale_growth(rows: list[dict]) -> list[str]:
+    """How search time, build time and size grow with the ModelNet40 galleries."""
+    if len(rows) < 2:
+        return []
+    n = [r['objects'] for r in rows]
+    search = slope(n, [r['search']['median_ms'] for r in rows])
+    retrieve = slope(n, [r['retrieve']['median_ms'] for r in rows])
+    L = [
+        f'Log-log slope of the search alone {search:.2f}, of the whole retrieval {retrieve:.2f} '
+        '(0: flat, 1: linear). Building, on every core: the calibration of the confidence answers '
+        'a fixed number of objects (category/calibration.py), so a small gallery pays more per '
+        'object.',
+        '',
+        '| gallery objects | build s in all (per object) | model kB per object |',
+        '|---|---|---|',
+    ]
+    for r in rows:
+        built = r.get('build_seconds')
+        per_object = f"{built:.0f} ({built / r['objects']:.2f})" if built else 'cached'
+        L.append(f"| {r['objects']} | {per_object} | {r['bytes'] / r['objects'] / 1e3:.1f} |")
+    return L + ['']
 
 
 def why_unmet(res: dict) -> list[str]:
@@ -808,7 +842,8 @@ def _bench(args) -> int:
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
     command = 'python -m tools bench' + (' --quick' if quick else '')
-    (out_dir / 'BENCHMARKS.md').write_text(report(res, command))
+    growth_plot(res, out_dir / GROWTH_PLOT)
+    (out_dir / 'BENCHMARKS.md').write_text(report(res, command, out_dir))
     (out_dir / 'benchmarks.json').write_text(json.dumps(res, indent=1, default=str))
     print(f"wrote {out_dir / 'BENCHMARKS.md'}")
     return 0

@@ -150,6 +150,7 @@ def growth(model_path: str, ycb: Path, queries: int, seed: int = 0) -> dict:
     from pcrp_core.evaluation.scenes import sample_scene
     from pcrp_core.instance.templates import shape_code
     from pcrp_core.sources.camera import Mesh
+    from tools.bench_plots import slope
 
     model = PCRP.load(model_path)
     files = sorted(ycb.glob('*.ply'))[:queries]
@@ -185,8 +186,6 @@ def growth(model_path: str, ycb: Path, queries: int, seed: int = 0) -> dict:
             model.estimate(p, viewpoint=np.zeros(3))
             t_all.append(time.perf_counter() - t0)
         points.append({'points': m, 'estimate': _pct(t_all)})
-    # log-log slope: how the cost grows (1: linearly)
-    slope = lambda xs, ys: float(np.polyfit(np.log(xs), np.log(ys), 1)[0])   # noqa: E731
     return {
         'gallery': sizes,
         'points': points,
@@ -284,7 +283,8 @@ def section(res: dict) -> list[str]:
         f"{g['template_kb_per_object']:.0f} kB of templates per object in memory); "
         f"log-log slope {g['gallery_slope']:.2f} for a whole answer (0: flat, 1: linear), "
         f"{g['shortlist_slope']:.2f} for the shortlist, the only step that looks "
-        'at every object:',
+        'at every object (a scan of every view up to 20,000 views, a KD-tree of them beyond: '
+        'pcrp_core/instance/shape_index.py):',
         '',
         '| objects | answer median / p95 ms | shortlist median ms | templates MB |',
         '|---|---|---|---|',

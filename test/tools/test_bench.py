@@ -18,7 +18,9 @@ The benchmark report says why a target is missed from its own run's figures.
 Not from numbers written into its prose.
 """
 
-from tools.bench import TARGETS, verdicts, why_unmet
+import pytest
+from tools.bench import _scale_growth, TARGETS, verdicts, why_unmet
+from tools.bench_plots import GROWTH_PLOT, growth_plot, growth_series, slope
 
 
 def _run(eight_under_5, eight_mean):
@@ -77,3 +79,26 @@ def test_the_shipped_node_is_judged_with_a_worker_per_core_and_both_are_shown():
     for spoilt in (_node_row(4, 2, 260, 0), _node_row(4, 2, 210, 1), _node_row(4, 2, 210, 0, 3)):
         assert not verdicts({'node_shipped': one + two[:1] + [spoilt]})[TARGETS[4][0]][1]
     assert not verdicts({'node_shipped': one})[TARGETS[4][0]][1]
+
+
+def test_the_growth_plot_fits_each_series_and_the_report_shows_it(tmp_path):
+    # a linear series must fit slope 1 and a flat one 0, whichever part of the run it came from
+    sizes = [10, 100, 1000, 10000]
+    gallery = [{'objects': n, 'match': {'median_ms': 50.0}, 'shortlist': {'median_ms': n / 100}}
+               for n in sizes]
+    points = [{'points': n, 'estimate': {'median_ms': 60.0}} for n in (1000, 10000)]
+    scale = [{'objects': n, 'retrieve': {'median_ms': 40.0, 'p95_ms': 41.0},
+              'search': {'median_ms': n / 1000, 'p95_ms': n / 1000}, 'bytes': 14_000 * n,
+              'parts': '', 'build_seconds': 0.5 * n} for n in (100, 1000)]
+    res = {'views': {'growth': {'gallery': gallery, 'points': points}}, 'scale': scale}
+    by_gallery, by_points = growth_series(res)
+    fitted = {label: slope(xs, ys) for label, xs, ys in by_gallery + by_points}
+    assert len(by_gallery) == 4 and len(by_points) == 1
+    assert fitted['YCB view, shortlist (one thread)'] == pytest.approx(1.0)
+    assert fitted['YCB view, whole answer (one thread)'] == pytest.approx(0.0, abs=1e-9)
+    assert fitted['ModelNet40 search alone'] == pytest.approx(1.0)
+    assert growth_plot(res, tmp_path / GROWTH_PLOT)
+    assert (tmp_path / GROWTH_PLOT).stat().st_size > 10_000
+    lines = _scale_growth(scale)
+    assert 'search alone 1.00' in lines[0] and '| 1000 | 500 (0.50) | 14.0 |' in lines
+    assert not growth_plot({}, tmp_path / 'none.png')
