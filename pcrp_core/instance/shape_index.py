@@ -66,7 +66,7 @@ class ShapeIndex:
         if self._tree is None:
             return _first(np.flatnonzero(~excluded), self.gaps(shape, weight)[~excluded], k)
         reach = min(1.0, weight)   # a view at Euclidean distance e has a gap of at least reach * e
-        asked = 16 * max(k, 1)
+        asked = 16 * k
         while True:
             asked = min(asked, n_objects * n_views)
             distance, flat = self._tree.query(shape, asked)
