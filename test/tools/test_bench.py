@@ -81,7 +81,7 @@ def test_the_shipped_node_is_judged_with_a_worker_per_core_and_both_are_shown():
     assert not verdicts({'node_shipped': one})[TARGETS[4][0]][1]
 
 
-def test_the_growth_plot_fits_each_series_and_the_report_shows_it(tmp_path):
+def test_the_growth_plot_fits_each_series_and_the_table_gives_build_time_per_object(tmp_path):
     # a linear series must fit slope 1 and a flat one 0, whichever part of the run it came from
     sizes = [10, 100, 1000, 10000]
     gallery = [{'objects': n, 'match': {'median_ms': 50.0}, 'shortlist': {'median_ms': n / 100}}
