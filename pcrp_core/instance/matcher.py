@@ -60,7 +60,7 @@ class Match:
     others: list[Candidate]
     tau: float
     noise: float
-    # how far the cloud's shape is from the answer's nearest view (shape_gaps): an object the
+    # how far the cloud's shape is from the answer's nearest view (ShapeIndex.gaps): an object the
     # gallery lacks is often answered by one of another size
     shape_gap: float
     coarse: list = field(default_factory=list)   # (coarse cost, object index), best first
@@ -95,19 +95,8 @@ class InstanceMatcher:
             )
         return self._surfaces[i]
 
-    def shape_gaps(self, shape: np.ndarray, opts) -> np.ndarray:
-        """
-        Return, per object, how far the query's shape (shape_code) is from its nearest view.
-
-        Along each axis a query smaller than the view counts opts.smaller_weight times as much as
-        one larger: an occluder hides part of a view (a fifth to over half of it in the robot
-        report's occluded views), while a cloud larger than every view of an object is not that
-        object.
-        """
-        return self.shapes.gaps(shape, opts.smaller_weight)
-
     def shortlist(self, shape: np.ndarray, opts, exclude=()) -> np.ndarray:
-        """Return the opts.shortlist objects of smallest shape_gaps, nearest first."""
+        """Return the opts.shortlist objects of smallest gap (ShapeIndex), nearest first."""
         return self.shapes.nearest(shape, opts.shortlist, opts.smaller_weight, exclude)[0]
 
     def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,

@@ -46,7 +46,12 @@ class ShapeIndex:
         )
 
     def gaps(self, shape: np.ndarray, weight: float, objects=slice(None)) -> np.ndarray:
-        """Return each object's gap (all objects, or those indexed by objects)."""
+        """
+        Return each object's gap (all objects, or those indexed by objects).
+
+        A smaller query counts less because an occluder cuts a view down, while a cloud larger
+        than every view of an object is not that object.
+        """
         d = shape - self.shapes[objects]
         d = np.where(d < 0, weight * d, d)
         return np.linalg.norm(d, axis=-1).min(axis=-1)
@@ -66,18 +71,19 @@ class ShapeIndex:
         if self._tree is None:
             return _first(np.flatnonzero(~excluded), self.gaps(shape, weight)[~excluded], k)
         reach = min(1.0, weight)   # a view at Euclidean distance e has a gap of at least reach * e
-        asked = 16 * k
+        total = n_objects * n_views
+        asked = min(16 * k, total)
         while True:
-            asked = min(asked, n_objects * n_views)
             distance, flat = self._tree.query(shape, asked)
             found = np.unique(np.atleast_1d(flat) // n_views)
             found = found[~excluded[found]]
-            # every view of an object not found lies beyond the farthest view returned
-            if len(found) >= k or asked == n_objects * n_views:
+            # every view of an object not found lies beyond the farthest view returned; all views
+            # returned find every object left, at least k
+            if len(found) >= k:
                 index, gap = _first(found, self.gaps(shape, weight, found), k)
-                if asked == n_objects * n_views or gap[-1] <= reach * np.max(distance):
+                if asked == total or gap[-1] <= reach * np.max(distance):
                     return index, gap
-            asked *= 4
+            asked = min(4 * asked, total)
 
 
 def _first(objects: np.ndarray, gaps: np.ndarray, k: int):

@@ -144,9 +144,9 @@ def test_the_shape_gap_is_how_far_a_cloud_is_from_each_objects_nearest_view():
     view = np.log([0.20, 0.10, 0.05])
     shapes = np.stack([[view, view + 1.0], [view - 0.5, view - 2.0]])
     matcher = InstanceMatcher(SimpleNamespace(shapes=shapes, directions=None))
-    opts = InstanceOptions(smaller_weight=0.5)
-    assert np.allclose(matcher.shape_gaps(view, opts), [0.0, 0.5 * np.sqrt(3)])
-    assert np.allclose(matcher.shape_gaps(view - 0.5, opts), [0.25 * np.sqrt(3), 0.0])
+    weight = InstanceOptions(smaller_weight=0.5).smaller_weight
+    assert np.allclose(matcher.shapes.gaps(view, weight), [0.0, 0.5 * np.sqrt(3)])
+    assert np.allclose(matcher.shapes.gaps(view - 0.5, weight), [0.25 * np.sqrt(3), 0.0])
 
 
 @pytest.mark.parametrize('weight', [0.5, 1.0, 2.0])
