@@ -26,11 +26,9 @@ and 9,843 objects; the node under load over DDS, and two node processes against 
 """
 from __future__ import annotations
 
-from importlib import metadata
 import json
 import os
 from pathlib import Path
-import platform
 import subprocess
 import sys
 import tempfile
@@ -39,6 +37,7 @@ import time
 import numpy as np
 from tools.bench_plots import GROWTH_PLOT, growth_plot, slope
 from tools.process_memory import tree_rss_mb
+from tools.provenance import code_key, machine
 from tools.soak import LARGE_CLOUDS_PROFILE
 
 CATEGORIES = ('airplane', 'chair', 'sofa', 'car')
@@ -63,34 +62,6 @@ STAGES = {
     'total': 'end to end',
 }
 CACHE = Path(os.environ.get('PCRP_CACHE', Path.home() / '.cache' / 'pcrp')) / 'bench'
-
-
-# -- the machine ----------------------------------------------------------------------------------
-def machine() -> dict:
-    cpu = ''
-    try:
-        cpu = next(
-            line.split(':', 1)[1].strip()
-            for line in Path('/proc/cpuinfo').read_text().splitlines()
-            if line.startswith('model name')
-        )
-    except (OSError, StopIteration):
-        pass
-    versions = {}
-    for dist in ('numpy', 'scipy', 'scikit-learn', 'open3d', 'ros-jazzy-rclpy', 'rosbags', 'pcrp'):
-        try:
-            versions[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            versions[dist] = '-'
-    return {
-        'cores': len(os.sched_getaffinity(0)),
-        'cpu': cpu or platform.processor(),
-        'python': platform.python_version(),
-        'memory_gb': round(os.sysconf('SC_PAGE_SIZE') * os.sysconf('SC_PHYS_PAGES') / 2**30, 1),
-        'versions': versions,
-        'date': time.strftime('%Y-%m-%d %H:%M'),
-        'load_start': round(os.getloadavg()[0], 1),
-    }
 
 
 def run_measured(cmd: list[str], env: dict | None = None) -> dict:
@@ -315,7 +286,6 @@ def bench_scale(data: Path, sizes, seed: int, n_queries: int = 20, progress=prin
     from pcrp_core import PCRP
     from pcrp_core.model_io import model_size
     from pcrp_core.sources import GalleryObject
-    from tools.robot_report import code_key
 
     archives = sorted(data.glob('*.npz'))
     everything = []

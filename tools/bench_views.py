@@ -36,6 +36,7 @@ import tempfile
 import time
 
 import numpy as np
+from tools.provenance import code_key
 
 REPO = Path(__file__).resolve().parents[1]
 THREADS = {v: '1' for v in ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS')}
@@ -63,8 +64,6 @@ def ycb_model(ycb: Path, cache: Path) -> tuple[str, dict]:
     Cached under the code that builds it (as the robot report's models): a model kept from
     older code would time today's queries on yesterday's gallery.
     """
-    from tools.robot_report import code_key
-
     name = f'ycb_{code_key()}'
     path, info = cache / name, cache / f'{name}_build.json'
     if not (path / 'model.json').exists() or not info.exists():

@@ -36,14 +36,12 @@ import subprocess
 import sys
 import time
 
+from tools.provenance import code_key, machine, REPO
 from tools.robot_protocol import (BASELINES, HELD_OUT, HOLDOUT_SEED, LOOKALIKE, METHODS,
                                   QUICK_OBJECTS, RECIPE, SCENARIOS, SEEDS, VIEWS_PER_OBJECT)
 
-REPO = Path(__file__).resolve().parents[1]
 CACHE = Path(os.environ.get('PCRP_CACHE', Path.home() / '.cache' / 'pcrp')) / 'robot'
 THREAD_VARS = ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS')
-# report-only modules: a change to them does not change a model, so does not rebuild one
-NOT_BUILD_CODE = ('pcrp_core/evaluation/run.py', 'pcrp_core/evaluation/metrics.py')
 
 
 def register(sub) -> None:
@@ -104,32 +102,6 @@ def _report(args) -> int:
 
 
 # -- models -------------------------------------------------------------------------------------
-def _git(*args) -> str:
-    done = subprocess.run(['git', *args], capture_output=True, text=True, cwd=REPO)
-    if done.returncode != 0:
-        raise RuntimeError(done.stderr)
-    return done.stdout
-
-
-def code_key() -> str:
-    """
-    Return a name for the code that builds a model.
-
-    The package's files as committed, and any uncommitted change to them, less the report-only
-    modules. A model cached under another key was built by other code, so is built again.
-    """
-    try:
-        listed = [line for line in _git('ls-tree', '-r', 'HEAD', '--', 'pcrp_core').splitlines()
-                  if line.split('\t')[-1] not in NOT_BUILD_CODE]
-        changed = _git('diff', 'HEAD', '--', 'pcrp_core', *(f':!{p}' for p in NOT_BUILD_CODE))
-        untracked = _git('ls-files', '--others', '--exclude-standard', '--', 'pcrp_core')
-    except (OSError, RuntimeError):    # not a checkout: the installed version names the code
-        from importlib import metadata
-        return 'pcrp-' + metadata.version('pcrp')
-    text = '\n'.join(listed) + changed + untracked
-    return hashlib.sha1(text.encode()).hexdigest()[:12]
-
-
 def mesh_files(data: Path) -> dict[str, Path]:
     """
     Map gallery ID -> file, as `pcrp build` names a folder's objects.
@@ -267,7 +239,6 @@ def run(data: Path, split: str, views: int, quick: bool, cache: Path, rebuild: b
     from pcrp_core.evaluation.scenes import sample_scenes
     from pcrp_core.sources import load_source
     from tools import robot_open3d as ro
-    from tools.bench import machine
     from tools.robot_twins import find_twins
 
     baseline_views = views if baseline_views is None else baseline_views

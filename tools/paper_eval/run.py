@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-import platform
 import sys
 import time
 
@@ -33,6 +32,7 @@ from tools.paper_eval import (confidence_table, frames, pose_table, registration
 from tools.paper_eval.models import ensure_model, held_out, loaded
 from tools.paper_eval.protocol import (INSTANCE_NOISE, load_split, make_query, PAPER_CATEGORIES,
                                        queries, query_rng, VIEWS)
+from tools.provenance import machine
 
 EXPERIMENTS = (
     'frames',
@@ -66,31 +66,6 @@ class Settings:
 
     def map_items(self, fn, items, state, desc):
         return parallel_map(fn, items, state, self.jobs, self.progress, desc, chunksize=4)
-
-
-def _machine() -> dict:
-    import importlib.metadata as md
-    import os
-    cpu = next(
-        (
-            line.split(':', 1)[1].strip()
-            for line in open('/proc/cpuinfo')
-            if line.startswith('model name')
-        ),
-        '',
-    )
-    versions = {}
-    for pkg in ('numpy', 'scipy', 'scikit-learn', 'open3d'):
-        try:
-            versions[pkg] = md.version(pkg)
-        except md.PackageNotFoundError:
-            pass
-    return {
-        'cores': len(os.sched_getaffinity(0)),
-        'cpu': cpu,
-        'python': platform.python_version(),
-        **versions,
-    }
 
 
 def run_frames(s: Settings) -> dict:
@@ -343,7 +318,7 @@ def run(s: Settings) -> dict:
         'seed': s.seed,
         'quick': s.quick,
         'per_category': s.per_category,
-        'machine': _machine(),
+        'machine': machine(),
         'date': time.strftime('%Y-%m-%d %H:%M'),
         'command': 'pcrp ' + ' '.join(sys.argv[1:]) if sys.argv[1:] else '',
         'seconds': {},
