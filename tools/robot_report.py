@@ -70,6 +70,10 @@ def register(sub) -> None:
     p.add_argument('--cache', default=None, help=f'where models are built (default {CACHE})')
     p.add_argument('--rebuild', action='store_true',
                    help='build the models even if the cache holds them for this code')
+    p.add_argument('--jobs', type=int, default=None,
+                   help='processes building a model (default: one per core, as pcrp build); '
+                        'the model is the same whatever the number, and views are answered on '
+                        'one thread after it is built')
     p.add_argument('--from-json', default=None, metavar='FILE',
                    help='only re-render the report from a robot.json')
     p.set_defaults(func=_report)
@@ -95,7 +99,7 @@ def _report(args) -> int:
         views = 1 if args.quick else args.views_per_object
         baseline_views = 0 if args.no_baselines else min(views, args.baseline_views or views)
         res = run(data, args.split, views, args.quick, Path(args.cache) if args.cache else CACHE,
-                  args.rebuild, baseline_views)
+                  args.rebuild, baseline_views, args.jobs)
     path = robot_writer.write(res, Path(args.out))
     print(f"wrote {path} ({res['seconds']['total'] / 60:.1f} minutes)")
     return 0
@@ -118,7 +122,8 @@ def mesh_files(data: Path) -> dict[str, Path]:
     return files
 
 
-def build_model(data: Path, cache: Path, rebuild: bool = False, without=()) -> Path:
+def build_model(data: Path, cache: Path, rebuild: bool = False, without=(),
+                jobs: int | None = None) -> Path:
     """
     Return the model the README's recipe builds from the meshes in data.
 
@@ -147,9 +152,8 @@ def build_model(data: Path, cache: Path, rebuild: bool = False, without=()) -> P
         _say(f'robot-report: reusing the model in {out}')
         return out
     _say(f'robot-report: building the model into {out}')
-    # --jobs 1: one process at a time on a shared machine; the model does not depend on it
-    cmd = [sys.executable, '-m', 'pcrp_core.cli', 'build', str(source), *RECIPE, '--jobs', '1',
-           '--out', str(out)]
+    cmd = [sys.executable, '-m', 'pcrp_core.cli', 'build', str(source), *RECIPE, '--out', str(out),
+           *(['--jobs', str(jobs)] if jobs else [])]
     done = subprocess.run(cmd, capture_output=True, text=True, cwd=REPO)
     if done.returncode != 0:
         raise RuntimeError(f'building the model failed: {done.stderr[-2000:]}')
@@ -232,7 +236,7 @@ def _baselines(scenes, targets, truths, twins, progress):
 
 
 def run(data: Path, split: str, views: int, quick: bool, cache: Path, rebuild: bool = False,
-        baseline_views: int | None = None) -> dict:
+        baseline_views: int | None = None, jobs: int | None = None) -> dict:
     from pcrp_core import PCRP
     from pcrp_core.cli import _progress
     from pcrp_core.evaluation.run import evaluate, Truths, twin_pairs
@@ -252,7 +256,7 @@ def run(data: Path, split: str, views: int, quick: bool, cache: Path, rebuild: b
     indices = {oid: i for i, oid in enumerate(ids)}
     chosen = ids[:: max(1, len(ids) // QUICK_OBJECTS)][:QUICK_OBJECTS] if quick else ids
     t0 = time.perf_counter()
-    model_path = build_model(data, cache, rebuild)
+    model_path = build_model(data, cache, rebuild, jobs=jobs)
     model = PCRP.load(model_path)
     seconds['model'] = time.perf_counter() - t0
     twins = twin_pairs(model)
@@ -272,7 +276,7 @@ def run(data: Path, split: str, views: int, quick: bool, cache: Path, rebuild: b
         reduced = model.subset(kept)
         reduced_twins = twins
     else:
-        reduced = PCRP.load(build_model(data, cache, rebuild, held))
+        reduced = PCRP.load(build_model(data, cache, rebuild, held, jobs))
         reduced_twins = twin_pairs(reduced)
     seconds['held_out_model'] = time.perf_counter() - t0
 
