@@ -12,7 +12,6 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-
 """
 What produced a result: the machine it ran on, and the code that built the model it used.
 
