@@ -34,7 +34,8 @@ robustness: setup
 eval: setup
 	$(PY) -m tools paper-eval --data ../shared/data/modelnet40 --out docs/results --seed 20261202
 
-# regenerates docs/results/BENCHMARKS.md: speed, memory, scale, the node under load (about 30 minutes)
+# regenerates docs/results/BENCHMARKS.md: speed, memory, scale, the node under load (about 30 minutes;
+# 55 when a change to pcrp_core makes it build its galleries and models again)
 bench: setup
 	$(PY) -m tools bench --out docs/results
 
