@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import re
 import sys
 import time
@@ -97,6 +98,15 @@ def register_build(sub) -> None:
         help='processes describing objects (default: one per core)',
     )
     p.add_argument(
+        '--scale',
+        type=float,
+        default=None,
+        metavar='FACTOR',
+        help='multiply every object by this first: 0.001 for meshes in millimetres (meshes are '
+        'read as metres, and a mesh gallery whose largest object is over 5 m across is refused '
+        'until its scale is given); kept in the model, so `pcrp eval` scales the meshes alike',
+    )
+    p.add_argument(
         '--up-axis',
         default=None,
         choices=['x', 'y', 'z', '-x', '-y', '-z'],
@@ -111,7 +121,10 @@ def _build(args) -> int:
     from pcrp_core.model_io import model_size
     from pcrp_core.geometry import axis_name
     from pcrp_core.sources import load_sources
+    from pcrp_core.sources.units import scaled, unit_problem
 
+    if args.scale is not None and not (math.isfinite(args.scale) and args.scale > 0):
+        return _fail(f'--scale {args.scale:g}: expected a positive factor (0.001 for millimetres)')
     t0 = time.perf_counter()
     try:
         objects = load_sources(
@@ -123,6 +136,10 @@ def _build(args) -> int:
         )
     except (OSError, ValueError) as e:
         return _fail(str(e))
+    if args.scale is not None:
+        objects = scaled(objects, args.scale)
+    elif problem := unit_problem(objects):
+        return _fail(f"{' '.join(args.sources)}: {problem}")
     print(
         f'{len(objects)} objects in {len({o.category for o in objects})} categories; fitting...',
         file=sys.stderr,
@@ -140,6 +157,8 @@ def _build(args) -> int:
         n_jobs=args.jobs,
         up_axis=args.up_axis,
     )
+    if args.scale is not None:
+        model.meta['mesh_scale'] = args.scale   # what `pcrp eval` multiplies the meshes by
     model.save(args.out)
     size = model_size(args.out)
     print(
@@ -287,6 +306,7 @@ def _eval(args) -> int:
     from pcrp_core.evaluation.run import evaluate, format_summary, jsonable, summarise
     from pcrp_core.evaluation.scenes import sample_scenes
     from pcrp_core.sources import load_source
+    from pcrp_core.sources.units import scaled
 
     if args.views_per_object < 1:
         return _fail('--views-per-object must be at least 1')
@@ -305,6 +325,11 @@ def _eval(args) -> int:
         objects = load_source(args.meshes)
     except (OSError, ValueError) as e:
         return _fail(str(e))
+    scale = model.meta.get('mesh_scale')
+    if scale is not None:
+        objects = scaled(objects, scale)
+        print(f'pcrp eval: meshes multiplied by {scale:g}, as the model was built',
+              file=sys.stderr)
     meshes = {o.gallery_id: o.mesh for o in objects if o.mesh is not None}
     skipped = [o.gallery_id for o in objects if o.mesh is None]
     if skipped:

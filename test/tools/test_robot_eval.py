@@ -260,6 +260,31 @@ def test_pcrp_eval_prints_right_or_twin_and_confidence_figures(built, capsys):
     assert '--kind table' in capsys.readouterr().err
 
 
+def test_meshes_in_millimetres_are_refused_until_scaled_and_eval_scales_them_alike(
+        built, tmp_path):
+    meshes, _, _ = built
+    mm, model, out = tmp_path / 'mm', tmp_path / 'model', tmp_path / 'eval.json'
+    mm.mkdir()
+    for f in sorted(meshes.glob('*.ply')):
+        mesh = o3d.io.read_triangle_mesh(str(f))
+        o3d.io.write_triangle_mesh(str(mm / f.name), mesh.scale(1000.0, center=(0, 0, 0)))
+    # read as metres, the 15 cm can would be 172 m across: said, with the way out, not built
+    refused = _run('build', str(mm), '--up-axis', 'z', '--out', str(model))
+    assert refused.returncode == 2 and not model.exists()
+    assert 'largest object, tall_can, is 17' in refused.stderr
+    assert '--scale 0.001' in refused.stderr
+    done = _run('build', str(mm), '--up-axis', 'z', '--scale', '0.001', '--out', str(model))
+    assert done.returncode == 0, done.stderr
+    assert json.loads((model / 'model.json').read_text())['mesh_scale'] == 0.001
+    # the model keeps the scale, so the recipe's eval renders the same millimetre meshes in metres
+    done = _run('eval', str(mm), '--model', str(model), '--views-per-object', '1', '--kind',
+                'table', '--up', '--json', str(out))
+    assert done.returncode == 0, done.stderr
+    assert 'meshes multiplied by 0.001' in done.stderr
+    overall = json.loads(out.read_text())['summary']['overall']
+    assert overall['right_or_twin'] == overall['pose_right'] == 1.0
+
+
 def test_the_robot_report_quick_run_writes_its_files_and_holds_an_object_out(
         built, monkeypatch, capsys):
     from tools import robot_writer
