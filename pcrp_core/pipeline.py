@@ -36,7 +36,7 @@ from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
 from pcrp_core.geometry import normalised, rms_radius, unit_axis, unit_vector
 from pcrp_core.instance.templates import Templates
-from pcrp_core.preprocess import clean, screen
+from pcrp_core.preprocess import clean, screen, Screened
 from pcrp_core.result import PoseResult
 from pcrp_core.retrieval import describe, PreparedCache
 from pcrp_core.threads import threads_from_environment
@@ -313,14 +313,14 @@ class PCRP:
         opts = self.options
         return clean(points, min(opts.max_points, self.n_points), opts.min_points, opts.seed)
 
-    def screen(self, points) -> np.ndarray:
+    def screen(self, points) -> Screened:
         """
-        Refuse a cloud prepare() would refuse, for a fraction of its cost; else thin it.
+        Refuse a cloud prepare() would refuse, for a fraction of its cost; else thin and mark it.
 
         For a stream to call on every cloud as it arrives: bad clouds are refused at once and
         only usable ones queued, and the farthest-point sampling (most of prepare's cost) is
-        left to estimate(), paid only for the clouds answered. estimate() of the thinned cloud
-        is estimate() of the cloud.
+        left to estimate(), paid only for the clouds answered; estimate() does not check a
+        Screened cloud again. estimate() of what this returns is estimate() of the cloud.
         """
         opts = self.options
         return screen(points, min(opts.max_points, self.n_points), opts.min_points, opts.seed)

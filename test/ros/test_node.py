@@ -355,7 +355,7 @@ def test_topics_take_turns_when_the_node_falls_behind(model, monkeypatch):
         real = model.estimate
 
         def slow(points, *args, **kwargs):
-            order.append('a' if np.mean(points[:, 2]) < 2.5 else 'b')
+            order.append('a' if np.mean(np.asarray(points)[:, 2]) < 2.5 else 'b')
             assert gate.acquire(timeout=30)
             return real(points, *args, **kwargs)
         monkeypatch.setattr(model, 'estimate', slow)
