@@ -172,7 +172,8 @@ class Screened:
         return len(self.points)
 
     def __array__(self, dtype=None, copy=None):
-        return self.points if dtype is None else self.points.astype(dtype)
+        arr = self.points if dtype is None else self.points.astype(dtype)
+        return arr.copy() if copy else arr
 
 
 def screen(points, max_points: int, min_points: int, seed: int = 0) -> Screened:

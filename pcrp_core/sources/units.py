@@ -44,7 +44,7 @@ def scaled(objects: list[GalleryObject], factor: float) -> list[GalleryObject]:
     ]
 
 
-def largest_mesh(objects: list[GalleryObject]) -> tuple[str, float] | None:
+def _largest_mesh(objects: list[GalleryObject]) -> tuple[str, float] | None:
     """(gallery ID, diagonal of its bounding box) of the largest object with a mesh, if any."""
     sizes = [(float(np.linalg.norm(np.ptp(o.points, axis=0))), o.gallery_id)
              for o in objects if o.mesh is not None and len(o.points)]
@@ -56,7 +56,7 @@ def largest_mesh(objects: list[GalleryObject]) -> tuple[str, float] | None:
 
 def unit_problem(objects: list[GalleryObject]) -> str:
     """Say why a mesh gallery does not look like metres ('' when it does)."""
-    largest = largest_mesh(objects)
+    largest = _largest_mesh(objects)
     if largest is None or largest[1] <= MAX_OBJECT_METRES:
         return ''
     gid, size = largest
