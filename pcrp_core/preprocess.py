@@ -140,8 +140,8 @@ def check_geometry(points: np.ndarray, min_points: int) -> None:
         )
 
 
-def _screened(points, max_points: int, min_points: int, seed: int):
-    """Return (subset, subset with duplicates merged), or raise InvalidCloud saying why."""
+def _screened(points, max_points: int, min_points: int, seed: int) -> np.ndarray:
+    """Return a finite subset with duplicates merged, or raise InvalidCloud saying why."""
     pts = finite_points(points)
     if len(np.asarray(points).reshape(-1, 3)) == 0:
         raise InvalidCloud('empty', 'the cloud has no points')
@@ -154,7 +154,7 @@ def _screened(points, max_points: int, min_points: int, seed: int):
         raise InvalidCloud('too_few_points', f'only {len(merged)} distinct points among '
                                              f'{n_finite}, at least {min_points} needed')
     check_geometry(merged, min_points)
-    return subset, merged
+    return merged
 
 
 @dataclass(frozen=True)
@@ -184,7 +184,7 @@ def screen(points, max_points: int, min_points: int, seed: int = 0) -> Screened:
     stream can screen every cloud as it arrives and clean only those it answers; clean() of
     what this returns is clean() of the cloud.
     """
-    return Screened(_screened(points, max_points, min_points, seed)[1])
+    return Screened(_screened(points, max_points, min_points, seed))
 
 
 def clean(points, max_points: int, min_points: int, seed: int = 0) -> np.ndarray:
@@ -196,4 +196,4 @@ def clean(points, max_points: int, min_points: int, seed: int = 0) -> np.ndarray
     """
     if isinstance(points, Screened):
         return spread(points.points, max_points)
-    return spread(_screened(points, max_points, min_points, seed)[1], max_points)
+    return spread(_screened(points, max_points, min_points, seed), max_points)
