@@ -84,9 +84,11 @@ class InstanceMatcher:
 
             tpl = self.templates
             points, normals = tpl.points[i], tpl.normals[i]
-            # copies: Open3D refuses read-only arrays (a worker process's memory-mapped model)
+            # copies: Open3D refuses read-only arrays (a worker process's memory-mapped model).
+            # Centred on the object: Open3D's ICP turns the target about its origin, and a mesh
+            # whose origin lies metres away couples each small turn with a large shift
             cloud = o3d.geometry.PointCloud(
-                o3d.utility.Vector3dVector(np.array(points, dtype=np.float64))
+                o3d.utility.Vector3dVector(np.array(points, dtype=np.float64) - tpl.centre[i])
             )
             cloud.normals = o3d.utility.Vector3dVector(np.array(normals, dtype=np.float64))
             self._surfaces[i] = (
@@ -157,7 +159,9 @@ class InstanceMatcher:
             stages = ((reach, reach / 2, 30), (2 * tau, tau, 20))
             for R, t in zip(Rs, ts):
                 surface, cloud = self.surface(i)
-                R, t = icp_point_to_plane(source, cloud, R, t, stages)
+                c = tpl.centre[i]          # the Open3D cloud is centred (surface())
+                R, t = icp_point_to_plane(source, cloud, R, t + R @ c, stages)
+                t = t - R @ c
                 clock.lap('refinement')
                 expected = visible_points(tpl.visible[i], self.directions, tpl.centre[i], R, t)
                 fit = judge(query, surface, expected, R, t, tau, opts.unshown_weight)
