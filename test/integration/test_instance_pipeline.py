@@ -125,8 +125,8 @@ def test_a_gallery_of_one_mesh_builds_and_answers():
 
 def test_meshes_whose_origin_lies_metres_away_are_posed_as_well():
     # a user's CAD export may put the origin at the cell's corner: the ICP must turn each object
-    # about itself (before it did, two of these six views of the can were posed 14-42 % of its
-    # diameter off, and the ICP of one went astray by metres)
+    # about itself (before it did, both views of the can here were posed 14 % and 42 % of its
+    # diameter off; a third view, not here, put it metres away)
     offset = np.array([2.0, 3.0, 0.5])
     meshes = {}
     for name in ('can', 'ell', 'wedge'):
