@@ -73,15 +73,17 @@ def code_key() -> str:
     """
     Return a name for the code that builds a model.
 
-    The package's files as committed, and any uncommitted change to them, less the report-only
-    modules. A model cached under another key was built by other code, so is built again.
+    The content of the package's files (committed or not, less the report-only modules), so the
+    same code has the same name before and after it is committed. A model cached under another key
+    was built by other code, so is built again.
     """
     try:
-        listed = [line for line in _git('ls-tree', '-r', 'HEAD', '--', 'pcrp_core').splitlines()
-                  if line.split('\t')[-1] not in NOT_BUILD_CODE]
-        changed = _git('diff', 'HEAD', '--', 'pcrp_core', *(f':!{p}' for p in NOT_BUILD_CODE))
-        untracked = _git('ls-files', '--others', '--exclude-standard', '--', 'pcrp_core')
+        names = _git('ls-files', '--cached', '--others', '--exclude-standard', '--', 'pcrp_core')
     except (OSError, RuntimeError):    # not a checkout: the installed version names the code
         return 'pcrp-' + metadata.version('pcrp')
-    text = '\n'.join(listed) + changed + untracked
-    return hashlib.sha1(text.encode()).hexdigest()[:12]
+    digest = hashlib.sha1()
+    for name in sorted(set(names.splitlines()) - set(NOT_BUILD_CODE)):
+        path = REPO / name
+        if path.is_file():   # a file deleted but not yet committed is listed too
+            digest.update(name.encode() + b'\0' + path.read_bytes() + b'\0')
+    return digest.hexdigest()[:12]
