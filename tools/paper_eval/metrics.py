@@ -25,10 +25,37 @@ from pcrp_core.geometry import rotation_angle_deg
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
+# Categories whose labels in this copy of ModelNet40 lay the horizontal axes either way (frames.py:
+# a car's length along x or y, its front either end), so an error is also given up to that
+LABEL_TOLERANT = ('airplane', 'car')
+# the turns about the up axis (z) the labels of those categories disagree by
+UP_TURNS = Rotation.from_rotvec(np.outer(np.arange(4) * np.pi / 2, [0.0, 0.0, 1.0])).as_matrix()
+
 
 def geodesic_deg(R_est: np.ndarray, R_true: np.ndarray) -> float:
     """Return the angle of the rotation that takes one to the other, in degrees."""
     return rotation_angle_deg(R_est, R_true)
+
+
+def label_tolerant_deg(R_est: np.ndarray, R_true: np.ndarray) -> float:
+    """
+    Return the rotation error up to a quarter or half turn of the labels about the up axis.
+
+    The least geodesic_deg(R_est, R_true @ Z) over the four turns Z: what the error would be had
+    the query been labelled the way the gallery object it was registered to was.
+    """
+    return min(geodesic_deg(R_est, R_true @ Z) for Z in UP_TURNS)
+
+
+def pose_error(R_est: np.ndarray, R_true: np.ndarray, category: str) -> dict:
+    """
+    {'error': the rotation error, 'tolerant': the same up to the labels}, in degrees.
+
+    Tolerant: label_tolerant_deg for the LABEL_TOLERANT categories, the error itself for others.
+    """
+    error = geodesic_deg(R_est, R_true)
+    tolerant = label_tolerant_deg(R_est, R_true) if category in LABEL_TOLERANT else error
+    return {'error': error, 'tolerant': tolerant}
 
 
 def euler_errors(R_est: np.ndarray, R_true: np.ndarray) -> np.ndarray:

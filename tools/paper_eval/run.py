@@ -303,6 +303,7 @@ def run_confidence(s: Settings, model_path) -> dict:
     return {
         'threshold': threshold,
         'summary': confidence_table.summarise(rows, threshold),
+        'summary_tolerant': confidence_table.summarise(rows, threshold, 'right_tolerant'),
         'rows': rows,
     }
 
