@@ -159,7 +159,7 @@ def test_the_bar_names_the_labels_bound_and_a_tie_at_the_quarter_turn():
             'uniform': {
                 'summary': {
                     'car': {'pcrp': {**errs(70.5, 89.9), 'tolerant': errs(4.2, 1.1)},
-                            'ransac_icp': errs(88.7, 89.8)},
+                            'ransac_icp': {**errs(88.7, 89.8), 'tolerant': errs(9.0, 0.9)}},
                     'chair': {'pcrp': errs(9.9, 1.6), 'ransac_icp': errs(32.2, 4.3)},
                 }
             }
@@ -188,6 +188,8 @@ def test_the_bar_names_the_labels_bound_and_a_tie_at_the_quarter_turn():
     )
     assert 'classical: **no** (both medians at the quarter turn)' in car
     assert '70.5° / 89.9° (labels either way: 4.2° / 1.1°)' in car
+    # up to the labels the paper's 11.22° / 2.11° is beaten, Open3D's median 0.9° is not
+    assert 'labels either way: paper yes, classical **no** |' in car
     assert 'paper: yes; classical: yes |' in chair and 'labels' not in chair
 
 
