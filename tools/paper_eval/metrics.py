@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 from pcrp_core.geometry import rotation_angle_deg
+from pcrp_core.hypotheses import upright_turns
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
@@ -29,7 +30,7 @@ from scipy.spatial.transform import Rotation
 # a car's length along x or y, its front either end), so an error is also given up to that
 LABEL_TOLERANT = ('airplane', 'car')
 # the turns about the up axis (z) the labels of those categories disagree by
-UP_TURNS = Rotation.from_rotvec(np.outer(np.arange(4) * np.pi / 2, [0.0, 0.0, 1.0])).as_matrix()
+UP_TURNS = upright_turns(np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, 1.0]), 4)
 
 
 def geodesic_deg(R_est: np.ndarray, R_true: np.ndarray) -> float:
