@@ -62,6 +62,23 @@ def test_labels_either_way_forgive_turns_about_the_up_axis_of_airplanes_and_cars
     assert pose_error(near, R, 'airplane')['tolerant'] == pytest.approx(7, abs=1e-4)
 
 
+def test_rejection_shares_count_a_label_turn_as_right_only_up_to_the_labels():
+    from tools.paper_eval.pose_table import rejection_summary
+
+    def row(category, error, tolerant, rejected):
+        return {'category': category, 'retrieved_category': category, 'score': 0.5,
+                'rejected': rejected, 'pcrp': {'error': error, 'tolerant': tolerant}}
+    inside = [row('car', 180.0, 1.0, False), row('chair', 2.0, 2.0, True),
+              row('sofa', 170.0, 170.0, False), row('airplane', 90.0, 3.0, True)]
+    s = rejection_summary(inside, [row('lamp', 50.0, 50.0, True)])
+    assert s['inside_wrong_but_accepted'] == pytest.approx(0.5)
+    assert s['tolerant']['inside_wrong_but_accepted'] == pytest.approx(0.25)
+    assert s['inside_right_but_rejected'] == pytest.approx(0.25)
+    assert s['tolerant']['inside_right_but_rejected'] == pytest.approx(0.5)
+    assert s['tolerant']['inside_right_among_accepted'] == pytest.approx(0.5)
+    assert s['outside_rejected'] == 1.0
+
+
 def test_precision_at_10_reads_both_definitions():
     chamfers = np.arange(200, dtype=float)       # object i is the i-th nearest
     ranked = np.r_[

@@ -110,22 +110,30 @@ def summarise(rows: list[dict], methods) -> dict:
 
 def rejection_summary(inside: list[dict], outside: list[dict]) -> dict:
     """
-    Return what the default fit-score threshold does with queries.
+    Return what the default confidence threshold does with queries.
 
-    Queries of gallery categories and of others.
+    Queries of gallery categories and of others. The gallery categories' shares are given with
+    the raw rotation error and, under 'tolerant', with the error up to the labels.
     """
-    def right(r):
-        return r['retrieved_category'] == r['category'] and r['pcrp']['error'] < RIGHT_DEG
     acc = [r for r in inside if not r['rejected']]
     rej = [r for r in inside if r['rejected']]
     out_cats = sorted({r['category'] for r in outside})
+
+    def shares(error: str) -> dict:
+        def right(r):
+            return r['retrieved_category'] == r['category'] and r['pcrp'][error] < RIGHT_DEG
+        return {
+            'inside_right_but_rejected': sum(map(right, rej)) / max(1, len(inside)),
+            'inside_wrong_and_rejected': sum(not right(r) for r in rej) / max(1, len(inside)),
+            'inside_wrong_but_accepted': sum(not right(r) for r in acc) / max(1, len(inside)),
+            'inside_right_among_accepted': sum(map(right, acc)) / max(1, len(acc)),
+        }
+    tolerant = bool(inside) and all('tolerant' in r['pcrp'] for r in inside)
     return {
         'inside_n': len(inside),
         'inside_rejected': len(rej) / max(1, len(inside)),
-        'inside_right_but_rejected': sum(map(right, rej)) / max(1, len(inside)),
-        'inside_wrong_and_rejected': sum(not right(r) for r in rej) / max(1, len(inside)),
-        'inside_wrong_but_accepted': sum(not right(r) for r in acc) / max(1, len(inside)),
-        'inside_right_among_accepted': sum(map(right, acc)) / max(1, len(acc)),
+        **shares('error'),
+        **({'tolerant': shares('tolerant')} if tolerant else {}),
         'outside': {
             c: {
                 'n': sum(r['category'] == c for r in outside),

@@ -269,7 +269,7 @@ def run_rejection(s: Settings, model_path) -> dict:
     )
     model = loaded(model_path)
     return {
-        'min_score': model.options.min_confidence,
+        'min_confidence': model.options.min_confidence,
         **pose_table.rejection_summary(inside, outside),
     }
 
