@@ -34,8 +34,10 @@ from rclpy.executors import MultiThreadedExecutor
 # burst of four clouds left two callbacks waiting while the loop spun ~700 times a second, and the
 # screening of the other two took 40-50 ms instead of 5. A thread for every callback that can run
 # at once (one group per input topic, the reload service, the diagnostics timer, the lifecycle
-# services) leaves none waiting; Python starts pool threads only when they are needed.
-CALLBACK_THREADS = 16
+# services) leaves none waiting. Python starts pool threads only when they are needed, so the cap
+# costs nothing until used; it is set well above any number of input topics a node is given (a
+# cap of 16 left callbacks waiting from about 14 topics on).
+CALLBACK_THREADS = 64
 
 
 def node_executor(context=None) -> MultiThreadedExecutor:

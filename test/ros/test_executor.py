@@ -17,6 +17,7 @@
 import threading
 import time
 
+import pytest
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.qos import DurabilityPolicy, QoSProfile
@@ -28,8 +29,9 @@ from std_msgs.msg import String
 HOLD_S = 0.5
 
 
-def test_a_burst_on_four_topics_starts_every_callback_at_once():
-    topics = [f'burst_{k}' for k in range(4)]
+@pytest.mark.parametrize('n_topics', [4, 24])
+def test_a_burst_on_several_topics_starts_every_callback_at_once(n_topics):
+    topics = [f'burst_{k}' for k in range(n_topics)]
     # transient local: a message published before the subscriber saw the publisher still arrives
     qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
     started, lock = {}, threading.Lock()
