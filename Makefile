@@ -29,7 +29,7 @@ test: setup
 robustness: setup
 	$(PY) -m tools robustness --out docs/results
 
-# regenerates docs/results/RESULTS.md: the paper's experiments and the baselines (about 50 minutes on 2 cores);
+# regenerates docs/results/RESULTS.md: the paper's experiments and the baselines (about an hour on 2 cores);
 # its seed was drawn fresh for the report (every choice was made at other seeds) and used once
 eval: setup
 	$(PY) -m tools paper-eval --data ../shared/data/modelnet40 --out docs/results --seed 20261202

@@ -246,6 +246,7 @@ def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
         '## A larger gallery',
         '## Rejection',
         '## Held-out check',
+        '### The same objects under other draws of the rotations',
     ):
         assert heading in text
     assert (out / 'pose_cdf.png').stat().st_size > 10_000 and (
@@ -287,6 +288,12 @@ def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
         'fgr_icp',
         'ransac_icp',
     }
+    # the other draws rotate the same objects otherwise: same queries, other errors
+    from tools.paper_eval.run import OTHER_SEEDS
+    assert sorted(res['seeds']) == [str(res['seed'] + k) for k in OTHER_SEEDS]
+    draws = [uniform] + list(res['seeds'].values())
+    assert all(d['all']['pcrp']['n'] == 8 for d in draws)
+    assert len({d['all']['pcrp']['mean'] for d in draws}) == len(draws)
     # the package's extensions (candidate vote, half turns, ICP) over the paper's bare registration
     assert uniform['all']['pcrp']['median'] < uniform['all']['pcrp_paper']['median']
 
@@ -342,5 +349,8 @@ def test_a_partial_run_carries_the_rest_of_an_earlier_one_and_says_so():
     assert out['frames'] == {'a': 1} and out['pose'] == {'uniform': 'new', 'view': 'old view'}
     assert out['carried'] == {'frames': 'then', 'pose/view': 'then'}
     assert out['seconds'] == {'frames': 1.0, 'pose': 2.0, 'total': 2.0}
+    # carried twice: an experiment keeps the date it was run on, not the date it was carried on
+    again = carry({'seed': 0, 'date': 'later', 'seconds': {'total': 1.0}}, out)
+    assert again['carried'] == {'frames': 'then', 'pose/view': 'then', 'pose/uniform': 'now'}
     with pytest.raises(ValueError, match='seed'):
         carry(res, {**earlier, 'seed': 1})

@@ -39,6 +39,7 @@ EXPERIMENTS = (
     'registration',
     'retrieval',
     'pose',
+    'seeds',
     'holdout',
     'partial',
     'instances',
@@ -49,6 +50,9 @@ EXPERIMENTS = (
 HOLDOUT = 100  # train objects per category kept out of the held-out check's model
 HOLDOUT_METHODS = ('pcrp', 'pcrp_up', 'pcrp_paper', 'ransac_icp')
 OUTSIDE_CATEGORIES = ('table', 'bench', 'lamp')
+# the pose table's queries drawn again from seed + each of these: how much its means owe to one
+# draw of rotations (a handful of half turns moves a category's mean by several degrees)
+OTHER_SEEDS = (1, 2)
 
 
 class Settings:
@@ -174,6 +178,21 @@ def run_pose(s: Settings, model_path, settings) -> dict:
         state = {'model': str(model_path), 'per_category': True, 'methods': methods}
         rows = s.map_items(pose_table.pose_one, qs, state, f'pose ({name})')
         out[name] = {'summary': pose_table.summarise(rows, methods), 'rows': rows}
+    return out
+
+
+def run_seeds(s: Settings, model_path) -> dict:
+    """
+    Return PCRP's pose summary under uniform rotations for the query seeds seed + OTHER_SEEDS.
+
+    The same objects as the pose table's, rotated as `--seed` with those seeds would rotate them.
+    """
+    out = {}
+    state = {'model': str(model_path), 'per_category': True, 'methods': ('pcrp',)}
+    for k in OTHER_SEEDS:
+        qs = queries(s.data, PAPER_CATEGORIES, 'pose-uniform', s.seed + k, s.per_category)
+        rows = s.map_items(pose_table.pose_one, qs, state, f'pose (seed {s.seed + k})')
+        out[str(s.seed + k)] = pose_table.summarise(rows, ('pcrp',))
     return out
 
 
@@ -360,6 +379,8 @@ def run(s: Settings) -> dict:
         settings += [('view', 'uniform', 'view', pose_table.VIEW_METHODS)]
     if settings:
         timed('pose', run_pose, s, model4, settings)
+    if 'seeds' in s.experiments:
+        timed('seeds', run_seeds, s, model4)
     if 'holdout' in s.experiments:
         held = built(
             'model4_holdout' + suffix, PAPER_CATEGORIES, s.build_limit, holdout=holdout_size(s)
@@ -401,6 +422,12 @@ def carry(res: dict, earlier: dict) -> dict:
         )
     out = dict(res)
     out['carried'] = {}
+
+    def ran(key: str) -> str:
+        # an experiment the earlier run itself carried keeps the date it was run on (a pose
+        # setting: or that of the whole pose experiment, as earlier runs recorded it)
+        carried = earlier.get('carried', {})
+        return carried.get(key, carried.get(key.split('/')[0], earlier['date']))
     for key, value in earlier.items():
         if key in (
             'seed',
@@ -414,14 +441,14 @@ def carry(res: dict, earlier: dict) -> dict:
             'model4',
         ):
             continue
-        if key not in out:
-            out[key] = value
-            out['carried'][key] = earlier['date']
-        elif key == 'pose':
+        if key == 'pose':   # carried setting by setting: a run may redo some of them
             for setting, rows in value.items():
-                if setting not in out['pose']:
-                    out['pose'] = {**out['pose'], setting: rows}
-                    out['carried'][f'pose/{setting}'] = earlier['date']
+                if setting not in out.get('pose', {}):
+                    out['pose'] = {**out.get('pose', {}), setting: rows}
+                    out['carried'][f'pose/{setting}'] = ran(f'pose/{setting}')
+        elif key not in out:
+            out[key] = value
+            out['carried'][key] = ran(key)
     out['seconds'] = {
         **{k: v for k, v in earlier['seconds'].items() if k != 'total'},
         **res['seconds'],
