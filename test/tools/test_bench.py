@@ -81,6 +81,20 @@ def test_the_shipped_node_is_judged_with_a_worker_per_core_and_both_are_shown():
     assert not verdicts({'node_shipped': one})[TARGETS[4][0]][1]
 
 
+def test_a_missed_shipped_node_target_is_explained_with_the_views_own_times():
+    rows = [_node_row(1, 2, 160, 0), _node_row(4, 2, 262, 0)]
+    run = {'node_shipped': rows,
+           'views': {'views': {'free': {'pcrp': {'median_ms': 80.0, 'p95_ms': 140.0},
+                                        'open3d_ransac_told': {'median_ms': 120.0}}}}}
+    run['verdicts'] = verdicts(run)
+    text = ' '.join(why_unmet(run))
+    assert '80 ms median and 140 ms p95' in text and 'near 220 ms' in text
+    assert '262 ms with 2 workers' in text and '160 ms' not in text
+    rows[1]['age_p95_ms'] = 240
+    run['verdicts'] = verdicts(run)
+    assert why_unmet(run) == []
+
+
 def test_the_growth_plot_fits_each_series_and_the_table_gives_build_time_per_object(tmp_path):
     # a linear series must fit slope 1 and a flat one 0, whichever part of the run it came from
     sizes = [10, 100, 1000, 10000]
