@@ -318,8 +318,8 @@ def test_the_robot_report_quick_run_writes_its_files_and_holds_an_object_out(
     assert res['held_out']['objects'] == ['tall_can'] and res['held_out']['how'] == 'subset'
     unknown = [r for n in ('free', 'table') for r in res['unknown'][n] if not r['known']]
     assert len(unknown) == 2 and all(r['rejected'] and not r['pose_right'] for r in unknown)
-    # the bar: Open3D told the object is met on its own views; the held-out can's views, all
-    # rejected, are counted as the gallery's missing objects
+    # the bar: pcrp against Open3D told the object, on the views Open3D answered; the held-out
+    # can's views, all rejected, are counted as the gallery's missing objects
     bar = text.split('## The bar')[1].split('## Overall')[0]
     assert 'pose right against Open3D told the object, on a table, up known' in bar
     lacks = next(line for line in bar.splitlines() if line.startswith('| objects the gallery'))

@@ -491,10 +491,10 @@ def bar(res: dict) -> list[str]:
             draws = _draws(res, cat)
             if len(draws) > 1:
                 either += (f'; mean over {len(draws)} draws of the rotations '
-                           f"{np.mean([d['mean'] for d in draws]):.1f}°")
-                if t and all('tolerant' in d for d in draws):
+                           f"{np.mean([x['mean'] for x in draws]):.1f}°")
+                if t and all('tolerant' in x for x in draws):
                     either += (' (labels either way '
-                               f"{np.mean([d['tolerant']['mean'] for d in draws]):.1f}°)")
+                               f"{np.mean([x['tolerant']['mean'] for x in draws]):.1f}°)")
             verdict = ''
             if t:   # the same verdicts, every method's errors taken up to the labels
                 rivals = [d[m]['tolerant'] for m in CLASSICAL if 'tolerant' in d.get(m, {})]
