@@ -675,13 +675,14 @@ def write_report(s, res: dict) -> Path:
         if res['per_category'] is None or res['quick']
         else f" --per-category {res['per_category']}"
     ) + (' --quick' if res['quick'] else '')
+    minutes = sec.get('total', 0) / 60
     lines = [
         "# Evaluation on ModelNet40: the paper's experiments, the baselines beside them",
         '',
         'Regenerate with `python -m tools paper-eval --data ../shared/data/modelnet40 --out '
         f"docs/results --seed {res['seed']}{flags}`. Run {res['date']} on "
         f"{res['machine']['cores']} cores ({res['machine']['cpu']}), "
-        f"{sec.get('total', 0) / 60:.0f} minutes in "
+        f"{minutes:.0f} minute{'' if round(minutes) == 1 else 's'} in "
         f"all{' (with models built by an earlier run)' if None in sec.values() else ''}. Test "
         f'objects per category: {per}; every random rotation, translation, point order, cut and '
         f"viewpoint comes from seed {res['seed']} (run with `--seed N` to draw others).",
