@@ -204,42 +204,32 @@ def _draws(res: dict, category: str) -> list[dict]:
     return [d[category]['pcrp'] for d in summaries if 'pcrp' in d.get(category, {})]
 
 
-def seeds_md(seed: int, first: dict, others: dict) -> list[str]:
-    """
-    Return the table of PCRP's pose errors under other draws of the rotations.
-
-    first: the pose table's summary (seed), others: run.run_seeds's summaries by seed.
-    """
-    draws = [(str(seed), first)] + sorted(others.items())
+def seeds_md(res: dict) -> list[str]:
+    """Return the table of PCRP's pose errors under other draws of the rotations (_draws)."""
+    seeds = [str(res['seed'])] + sorted(res['seeds'])
     lines = [
         '### The same objects under other draws of the rotations',
         '',
         "PCRP's defaults on the pose table's queries with the rotations drawn again (`--seed` "
-        f"{', '.join(k for k, _ in draws[1:])}): a category's mean moves by several degrees with "
+        f"{', '.join(seeds[1:])}): a category's mean moves by several degrees with "
         'a handful of half turns. Mean / median °; airplane and car with their labels either way '
         'in brackets.',
         '',
-        '| category | ' + ' | '.join(f'seed {k}' for k, _ in draws)
+        '| category | ' + ' | '.join(f'seed {k}' for k in seeds)
         + ' | mean over the draws | paper |',
-        '|---' * (len(draws) + 3) + '|',
+        '|---' * (len(seeds) + 3) + '|',
     ]
     for cat in list(PAPER_CATEGORIES) + ['all']:
-        cells, means = [], []
-        for _, summary in draws:
-            d = summary.get(cat, {}).get('pcrp')
-            if d is None:
-                break
-            t = d.get('tolerant') if cat in LABEL_TOLERANT else None
-            extra = f" ({t['mean']:.1f} / {t['median']:.1f})" if t else ''
-            cells.append(f"{d['mean']:.1f} / {d['median']:.1f}{extra}")
-            means.append(d['mean'])
-        if len(cells) < len(draws):
+        draws = _draws(res, cat)
+        if len(draws) < len(seeds):
             continue
+        tolerant = [d.get('tolerant') if cat in LABEL_TOLERANT else None for d in draws]
+        cells = [f"{d['mean']:.1f} / {d['median']:.1f}"
+                 + (f" ({t['mean']:.1f} / {t['median']:.1f})" if t else '')
+                 for d, t in zip(draws, tolerant)]
+        over = f"{np.mean([d['mean'] for d in draws]):.1f}" + (
+            f" ({np.mean([t['mean'] for t in tolerant]):.1f})" if all(tolerant) else '')
         paper = f'{PAPER_POSE[cat][0]} / {PAPER_POSE[cat][1]}' if cat in PAPER_POSE else ''
-        tolerant = [summary[cat]['pcrp'].get('tolerant') for _, summary in draws]
-        over = f'{np.mean(means):.1f}' + (
-            f" ({np.mean([t['mean'] for t in tolerant]):.1f})"
-            if cat in LABEL_TOLERANT and all(tolerant) else '')
         lines.append(f"| {cat} | {' | '.join(cells)} | {over} | {paper} |")
     return lines + ['']
 
@@ -724,7 +714,7 @@ def write_report(s, res: dict) -> Path:
                 '',
             ]
     if 'seeds' in res and 'pose' in res and 'uniform' in res['pose']:
-        lines += seeds_md(res['seed'], res['pose']['uniform']['summary'], res['seeds'])
+        lines += seeds_md(res)
     if 'pose' in res and 'euler45' in res['pose']:
         lines += ['### The narrower protocol: each Euler angle in [0°, 45°]', '',
                   *pose_md(res['pose']['euler45']['summary'], pose_table.METHODS, paper=False)]

@@ -169,14 +169,15 @@ def run_retrieval(s: Settings, model_path) -> dict:
     return out
 
 
-def run_pose(s: Settings, model_path, settings) -> dict:
+def run_pose(s: Settings, model_path, settings, seed: int | None = None) -> dict:
+    """Run each pose setting (name, rotation, cut, methods); seed: another draw than s.seed."""
+    seed = s.seed if seed is None else seed
     out = {}
     for name, rotation, cut, methods in settings:
-        qs = queries(
-            s.data, PAPER_CATEGORIES, f'pose-{name}', s.seed, s.per_category, rotation, cut
-        )
+        qs = queries(s.data, PAPER_CATEGORIES, f'pose-{name}', seed, s.per_category, rotation, cut)
         state = {'model': str(model_path), 'per_category': True, 'methods': methods}
-        rows = s.map_items(pose_table.pose_one, qs, state, f'pose ({name})')
+        desc = f'pose ({name})' if seed == s.seed else f'pose ({name}, seed {seed})'
+        rows = s.map_items(pose_table.pose_one, qs, state, desc)
         out[name] = {'summary': pose_table.summarise(rows, methods), 'rows': rows}
     return out
 
@@ -185,15 +186,12 @@ def run_seeds(s: Settings, model_path) -> dict:
     """
     Return PCRP's pose summary under uniform rotations for the query seeds seed + OTHER_SEEDS.
 
-    The same objects as the pose table's, rotated as `--seed` with those seeds would rotate them.
+    The pose table's queries (run_pose's 'uniform' setting), rotated as `--seed` with those seeds
+    would rotate them; only the summaries are kept.
     """
-    out = {}
-    state = {'model': str(model_path), 'per_category': True, 'methods': ('pcrp',)}
-    for k in OTHER_SEEDS:
-        qs = queries(s.data, PAPER_CATEGORIES, 'pose-uniform', s.seed + k, s.per_category)
-        rows = s.map_items(pose_table.pose_one, qs, state, f'pose (seed {s.seed + k})')
-        out[str(s.seed + k)] = pose_table.summarise(rows, ('pcrp',))
-    return out
+    uniform = [('uniform', 'uniform', None, ('pcrp',))]
+    return {str(s.seed + k): run_pose(s, model_path, uniform, s.seed + k)['uniform']['summary']
+            for k in OTHER_SEEDS}
 
 
 def holdout_size(s: Settings) -> int:
