@@ -123,13 +123,13 @@ def _confidences(rows: list[dict]) -> tuple[list[float], list[float]]:
             [r['confidence'] for r in answered if not r['pose_right']])
 
 
-def _unknown_split(res: dict, name: str | None = None):
+def _unknown_split(res: dict, names=None):
     """
     (known rows, unknown rows, unknown rows with a look-alike left, without) of the held-out model.
 
-    One scenario or (None) all.
+    Of the scenarios named (None: all).
     """
-    rows = [r for n, per in res['unknown'].items() if name is None or n == name for r in per]
+    rows = [r for n, per in res['unknown'].items() if names is None or n in names for r in per]
     near = res['held_out']['lookalikes']
     known = [r for r in rows if r['known']]
     unknown = [r for r in rows if not r['known']]
@@ -230,7 +230,7 @@ def plot_roc(res: dict, path: Path) -> None:
     for ax, name in zip(axes, names):
         ax.plot([0, 1], [0, 1], color='grey', lw=0.8, ls=':')
         curves = [(_confidences(res['results'][name]['pcrp']), 'pcrp: right vs wrong', 'C0-')]
-        known, unknown, _, _ = _unknown_split(res, name)
+        known, unknown, _, _ = _unknown_split(res, (name,))
         curves.append((([r['confidence'] for r in _answered(known) if r['pose_right']],
                         [r['confidence'] for r in _answered(unknown)]),
                        'pcrp: right vs unknown object', 'C3-'))
@@ -329,9 +329,7 @@ def _bar(res: dict, summaries: dict) -> str:
                  f"{_pct1(one['wrong_accepted'])} / {_pct1(one['right_rejected'])}",
                  yes(one['wrong_accepted'] <= TARGETS['wrong_accepted']
                      and one['right_rejected'] <= TARGETS['right_rejected'])])
-    known = [r for n in ONE_SIDED if n in res['unknown'] for r in res['unknown'][n] if r['known']]
-    unknown = [r for n in ONE_SIDED if n in res['unknown'] for r in res['unknown'][n]
-               if not r['known']]
+    known, unknown, _, _ = _unknown_split(res, ONE_SIDED)
     if unknown:
         rej, auc = _unknown_rejected(unknown, _min_confidence(res)), _unknown_auc(known, unknown)
         rows.append(['objects the gallery lacks: rejected / ROC AUC, one-sided',
@@ -429,12 +427,8 @@ def _unknown_section(res: dict) -> str:
     ]
     rows = []
     for name in list(res['unknown']) + ['one-sided', 'all']:
-        names = ONE_SIDED if name == 'one-sided' else list(res['unknown']) if name == 'all' \
-            else [name]
-        known = [r for n in names for r in res['unknown'][n] if r['known']]
-        parts = [[r for n in names for r in res['unknown'][n] if not r['known']]]
-        parts += [[r for r in parts[0] if r['object_id'] in near],
-                  [r for r in parts[0] if r['object_id'] not in near]]
+        names = ONE_SIDED if name == 'one-sided' else None if name == 'all' else (name,)
+        known, *parts = _unknown_split(res, names)
         s = statistics(known)
         title = {'one-sided': '**free + table (one-sided)**', 'all': '**all**'}.get(
             name, _title(name))
@@ -447,11 +441,8 @@ def _unknown_section(res: dict) -> str:
                         'with a look-alike left: rejected', 'without: rejected',
                         'right vs unknown AUC', 'with a look-alike: AUC', 'without: AUC',
                         'known: right', 'known: wrong acc', 'known: right rej'], rows))
-    _, unknown, with_near, without = _unknown_split(res, None)
-    known_one = [r for n in ONE_SIDED if n in res['unknown'] for r in res['unknown'][n]
-                 if r['known']]
-    unknown_one = [r for n in ONE_SIDED if n in res['unknown'] for r in res['unknown'][n]
-                   if not r['known']]
+    unknown = _unknown_split(res, None)[1]
+    known_one, unknown_one, _, _ = _unknown_split(res, ONE_SIDED)
     rej, auc = _unknown_rejected(unknown_one, threshold), _unknown_auc(known_one, unknown_one)
     text.append(
         f"The issue asks for >= {_pct(TARGETS['unknown_rejected'])} of objects from outside the "
