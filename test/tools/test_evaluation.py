@@ -66,7 +66,7 @@ def test_rejection_shares_count_a_label_turn_as_right_only_up_to_the_labels():
     from tools.paper_eval.pose_table import rejection_summary
 
     def row(category, error, tolerant, rejected):
-        return {'category': category, 'retrieved_category': category, 'score': 0.5,
+        return {'category': category, 'retrieved_category': category, 'confidence': 0.5,
                 'rejected': rejected, 'pcrp': {'error': error, 'tolerant': tolerant}}
     inside = [row('car', 180.0, 1.0, False), row('chair', 2.0, 2.0, True),
               row('sofa', 170.0, 170.0, False), row('airplane', 90.0, 3.0, True)]

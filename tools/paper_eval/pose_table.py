@@ -65,7 +65,8 @@ def pose_one(state: dict, q) -> dict:
     )
     r = model.estimate(q.points, viewpoint=q.viewpoint)
     row = {'name': q.name, 'category': q.category, 'retrieved': r.gallery_id,
-           'retrieved_category': r.category, 'score': r.score, 'rejected': bool(r.rejected),
+           'retrieved_category': r.category, 'confidence': r.confidence,
+           'rejected': bool(r.rejected),
            'pcrp': {**pose_error(r.rotation, q.R, q.category), 'seconds': r.timings['total']}}
     if 'pcrp_paper' in state['methods']:
         p = paper_variant(model).estimate(q.points, viewpoint=q.viewpoint)
@@ -144,6 +145,6 @@ def rejection_summary(inside: list[dict], outside: list[dict]) -> dict:
         'outside_rejected': (
             float(np.mean([r['rejected'] for r in outside])) if outside else float('nan')
         ),
-        'score_inside': [r['score'] for r in inside],
-        'score_outside': [r['score'] for r in outside],
+        'confidence_inside': [r['confidence'] for r in inside],
+        'confidence_outside': [r['confidence'] for r in outside],
     }
