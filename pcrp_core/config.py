@@ -371,7 +371,7 @@ class InstanceOptions(Options):
         7, 'Objects, best-ranked first, whose hypotheses are refined and judged.', low=1
     )
     coarse_ratio: float = setting(
-        2.0,
+        1.6,
         'Of those, only objects whose best hypothesis costs at most this many times the '
         "best object's.",
         low=1.0,
