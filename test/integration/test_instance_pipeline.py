@@ -99,6 +99,23 @@ def test_an_object_the_gallery_does_not_hold_is_less_sure_than_one_it_does(mesh_
     assert min(known) > max(unknown)
 
 
+def test_only_objects_within_the_coarse_ratio_of_the_best_are_refined(mesh_model):
+    # the refined objects are the answer and its rivals (others); each costs two ICP runs
+    model, meshes = mesh_model
+    points = model.prepare(
+        sample_scene(meshes['ell'], 'ell', 4, 0, 'free', seed=8).points.astype(np.float64)
+    )
+
+    def refined(**change):
+        m = model.matcher.match(points, model.instance_options.replace(**change))
+        return [m.best.index] + [c.index for c in m.others], [i for _, i in m.coarse]
+
+    alone, ranked = refined(coarse_ratio=1.0)
+    assert alone == [ranked[0]]
+    three, ranked = refined(coarse_ratio=1e6, objects_refined=3)
+    assert sorted(three) == sorted(ranked[:3])
+
+
 def test_learning_the_confidence_again_gives_the_same_calibration(mesh_model):
     # Open3D's parallel ICP sums in the order its threads finish: on two threads the same views
     # gave another calibration every build (a model file must come out the same every time)
