@@ -612,12 +612,15 @@ def why_unmet(res: dict) -> list[str]:
     """Plain reasons for each target missed, from this run's own figures."""
     out = []
     v = res.get('verdicts', {})
+
+    def missed(k: int) -> bool:
+        return not v.get(TARGETS[k][0], (None, True))[1]
     single = [q for q in res.get('queries', []) if q['threads'] == '1' and q['n_points'] == 1024]
     st = single[0]['stages'] if single else {}
     reg, tot = st.get('registration', {}).get('median_ms', 0), st.get('total', {}).get(
         'median_ms', 0
     )
-    if single and not v.get(TARGETS[0][0], (None, True))[1]:
+    if single and missed(0):
         out.append(
             f'**Why a query misses its target.** {reg:.0f} of its {tot:.0f} ms are registration: '
             'hypotheses from each of the retrieved candidates (RANSAC on feature matches, '
@@ -625,7 +628,7 @@ def why_unmet(res: dict) -> list[str]:
             'hypothesis on every candidate.'
             + _what_time_buys(single[0]['methods'])
         )
-    if res.get('node') and not v.get(TARGETS[2][0], (None, True))[1]:
+    if res.get('node') and missed(2):
         out.append(
             "**Why the node's answers are older than 250 ms.** One worker answers the newest "
             'cloud of each topic: a cloud that arrives while another is being answered waits for '
@@ -637,7 +640,7 @@ def why_unmet(res: dict) -> list[str]:
         )
     shipped = [r for r in res.get('node_shipped', []) if r['topics'] > 1]
     views = res.get('views', {}).get('views', {}).get('free', {}).get('pcrp')
-    if shipped and views and not v.get(TARGETS[4][0], (None, True))[1]:
+    if shipped and views and missed(4):
         ages = ', '.join(f"{r['age_p95_ms']:.0f} ms with {r.get('workers', 1)} worker"
                          f"{'s' if r.get('workers', 1) > 1 else ''}" for r in shipped)
         med, p95 = views['median_ms'], views['p95_ms']

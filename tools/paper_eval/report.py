@@ -204,6 +204,13 @@ def _draws(res: dict, category: str) -> list[dict]:
     return [d[category]['pcrp'] for d in summaries if 'pcrp' in d.get(category, {})]
 
 
+def _mean_over(draws: list[dict], category: str) -> tuple[float, float | None]:
+    """Return the mean of the draws' means, and of their means with labels either way (or None)."""
+    tolerant = [d.get('tolerant') for d in draws] if category in LABEL_TOLERANT else [None]
+    return (float(np.mean([d['mean'] for d in draws])),
+            float(np.mean([t['mean'] for t in tolerant])) if all(tolerant) else None)
+
+
 def seeds_md(res: dict) -> list[str]:
     """Return the table of PCRP's pose errors under other draws of the rotations (_draws)."""
     seeds = [str(res['seed'])] + sorted(res['seeds'])
@@ -227,8 +234,8 @@ def seeds_md(res: dict) -> list[str]:
         cells = [f"{d['mean']:.1f} / {d['median']:.1f}"
                  + (f" ({t['mean']:.1f} / {t['median']:.1f})" if t else '')
                  for d, t in zip(draws, tolerant)]
-        over = f"{np.mean([d['mean'] for d in draws]):.1f}" + (
-            f" ({np.mean([t['mean'] for t in tolerant]):.1f})" if all(tolerant) else '')
+        mean, mean_either = _mean_over(draws, cat)
+        over = f'{mean:.1f}' + (f' ({mean_either:.1f})' if mean_either is not None else '')
         paper = f'{PAPER_POSE[cat][0]} / {PAPER_POSE[cat][1]}' if cat in PAPER_POSE else ''
         lines.append(f"| {cat} | {' | '.join(cells)} | {over} | {paper} |")
     return lines + ['']
@@ -480,11 +487,10 @@ def bar(res: dict) -> list[str]:
             either = (f" (labels either way: {t['mean']:.1f}° / {t['median']:.1f}°)" if t else '')
             draws = _draws(res, cat)
             if len(draws) > 1:
-                either += (f'; mean over {len(draws)} draws of the rotations '
-                           f"{np.mean([x['mean'] for x in draws]):.1f}°")
-                if t and all('tolerant' in x for x in draws):
-                    either += (' (labels either way '
-                               f"{np.mean([x['tolerant']['mean'] for x in draws]):.1f}°)")
+                mean, mean_either = _mean_over(draws, cat)
+                either += f'; mean over {len(draws)} draws of the rotations {mean:.1f}°'
+                if mean_either is not None:
+                    either += f' (labels either way {mean_either:.1f}°)'
             verdict = ''
             if t:   # the same verdicts, every method's errors taken up to the labels
                 rivals = [d[m]['tolerant'] for m in CLASSICAL if 'tolerant' in d.get(m, {})]
