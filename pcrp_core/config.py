@@ -377,6 +377,11 @@ class InstanceOptions(Options):
         low=1.0,
     )
     refine_points: int = setting(384, 'Query points ICP uses.', low=16)
+    half_turns: bool = setting(
+        True,
+        "Also refine the answer turned half about each of its object's principal axes "
+        '(about the up axis alone when gravity is given), keeping the best fit.',
+    )
     fit_tolerance: float = setting(
         0.003,
         'Least distance, metres, beyond which a point counts as unexplained.',
