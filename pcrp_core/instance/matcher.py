@@ -103,6 +103,24 @@ class InstanceMatcher:
         """Return the opts.shortlist objects of smallest gap (ShapeIndex), nearest first."""
         return self.shapes.nearest(shape, opts.shortlist, opts.smaller_weight, exclude)[0]
 
+    def refine(self, i: int, R: np.ndarray, t: np.ndarray, source, stages):
+        """
+        Return object i's pose (R, t) refined by ICP of the Open3D cloud source onto it.
+
+        About the object's centre: its Open3D cloud is centred (surface()).
+        """
+        c = self.templates.centre[i]
+        R, t = icp_point_to_plane(source, self.surface(i)[1], R, t + R @ c, stages)
+        return R, t - R @ c
+
+    def verify(self, i: int, R: np.ndarray, t: np.ndarray, query: Surface, tau: float,
+               opts) -> Candidate:
+        """Return object i at pose (R, t) judged against the query (verification.py)."""
+        tpl = self.templates
+        expected = visible_points(tpl.visible[i], self.directions, tpl.centre[i], R, t)
+        return Candidate(i, R, t, judge(query, self.surface(i)[0], expected, R, t, tau,
+                                        opts.unshown_weight))
+
     def best_half_turn(self, best: Candidate, query: Surface, source, tau: float, opts,
                        up_object=None) -> Candidate:
         """
@@ -115,7 +133,6 @@ class InstanceMatcher:
         stand it on its head). source: the Open3D cloud ICP refined with.
         """
         i = best.index
-        surface, cloud = self.surface(i)
         c = self.templates.centre[i]
         if up_object is not None:
             axes = [np.asarray(up_object, dtype=np.float64) / np.linalg.norm(up_object)]
@@ -124,12 +141,10 @@ class InstanceMatcher:
         for a in axes:
             R = best.R @ (2.0 * np.outer(a, a) - np.eye(3))    # the half turn about a
             t = best.t + (best.R - R) @ c                       # about the object's centre
-            R, t = icp_point_to_plane(source, cloud, R, t + R @ c, ((2 * tau, tau, 20),))
-            t = t - R @ c
-            expected = visible_points(self.templates.visible[i], self.directions, c, R, t)
-            fit = judge(query, surface, expected, R, t, tau, opts.unshown_weight)
-            if fit.cost < best.fit.cost:
-                best = Candidate(i, R, t, fit)
+            R, t = self.refine(i, R, t, source, ((2 * tau, tau, 20),))
+            turned = self.verify(i, R, t, query, tau, opts)
+            if turned.fit.cost < best.fit.cost:
+                best = turned
         return best
 
     def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,
@@ -189,16 +204,12 @@ class InstanceMatcher:
         for _, i, Rs, ts in within:
             reach = float(np.clip(0.15 * tpl.diameter[i], 2 * tau, 0.03))
             stages = ((reach, reach / 2, 30), (2 * tau, tau, 20))
-            surface, cloud = self.surface(i)
-            c = tpl.centre[i]          # the Open3D cloud is centred (surface())
             for R, t in zip(Rs, ts):
-                R, t = icp_point_to_plane(source, cloud, R, t + R @ c, stages)
-                t = t - R @ c
+                R, t = self.refine(i, R, t, source, stages)
                 clock.lap('refinement')
-                expected = visible_points(tpl.visible[i], self.directions, c, R, t)
-                fit = judge(query, surface, expected, R, t, tau, opts.unshown_weight)
-                if i not in best_of or fit.cost < best_of[i].fit.cost:
-                    best_of[i] = Candidate(i, R, t, fit)
+                candidate = self.verify(i, R, t, query, tau, opts)
+                if i not in best_of or candidate.fit.cost < best_of[i].fit.cost:
+                    best_of[i] = candidate
                 clock.lap('verification')
         order = sorted(best_of.values(), key=lambda c: c.fit.cost)
         if opts.half_turns:
