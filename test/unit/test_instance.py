@@ -58,6 +58,18 @@ def test_a_roll_about_the_line_of_sight_shifts_the_signature_by_as_many_sectors(
     assert int(np.argmin(costs[0])) == 7 and costs[0].min() < 1e-4 < costs[0, 0]
 
 
+def test_shift_costs_are_the_mean_squared_differences_of_the_rolled_signatures():
+    rng = np.random.default_rng(1)
+    query, views = rng.random((SECTORS, 2)) * 0.1, rng.random((5, SECTORS, 2)) * 0.1
+    views[2, 4:11] = 0.0   # sectors a view holds no point in
+    costs = shift_costs(query, views, depth_weight=0.3)
+    for v in range(len(views)):
+        for s in range(SECTORS):
+            diff = np.roll(views[v], s, axis=0) - query
+            expected = (diff[:, 0] ** 2).mean() + 0.3 * (diff[:, 1] ** 2).mean()
+            assert costs[v, s] == pytest.approx(expected, rel=1e-9, abs=1e-15)
+
+
 def test_taking_and_about_are_the_rotations_they_say():
     a, b = np.array([0.0, 0.6, 0.8]), np.array([1.0, 0.0, 0.0])
     R = rotation_taking(a, b)
