@@ -91,6 +91,13 @@ def run(make_node, program: str, args=None) -> int:
         return 1
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RuntimeError:
+        # Ctrl-C shuts the context down from rclpy's signal handler, asynchronously: if that lands
+        # between the executor's check of the context and its making the next wait set, rcl
+        # refuses the wait set (RCLError, a RuntimeError) instead of the executor stopping. That
+        # is the same Ctrl-C; anything raised while the context is still up is a real failure.
+        if rclpy.ok():
+            raise
     finally:
         executor.shutdown()
         if node is not None:

@@ -87,6 +87,50 @@ def test_a_broken_model_stops_the_node_and_the_cli_with_one_clear_line(fault, tm
         )
 
 
+# run() with an executor that meets the Ctrl-C race: rclpy's signal handler shuts the context
+# down while the executor is between checking it and making its next wait set, and rcl refuses
+# the wait set. In a process of its own: run() owns the default context.
+CTRL_C_RACE = """
+import sys
+import rclpy
+from pcrp_ros import node
+
+
+class Racing:
+    def add_node(self, n):
+        pass
+
+    def spin(self):
+        if sys.argv[1] == 'shut':
+            rclpy.shutdown()
+        raise RuntimeError('failed to initialize wait set: the given context is not valid')
+
+    def shutdown(self):
+        pass
+
+
+class Quiet:
+    def destroy_node(self):
+        pass
+
+
+node.node_executor = Racing
+sys.exit(node.run(Quiet, 'pcrp_node'))
+"""
+
+
+@pytest.mark.parametrize('context', ['shut', 'up'])
+def test_a_ctrl_c_that_races_the_executor_stops_the_node_quietly_and_nothing_else_does(context):
+    import subprocess
+    import sys
+    result = subprocess.run([sys.executable, '-c', CTRL_C_RACE, context], capture_output=True,
+                            text=True, timeout=60)
+    if context == 'shut':
+        assert result.returncode == 0 and 'Traceback' not in result.stderr, result.stderr
+    else:
+        assert result.returncode != 0 and 'failed to initialize wait set' in result.stderr
+
+
 def _header(sec):
     return Header(stamp=Time(sec=sec, nanosec=0), frame_id='camera_optical_frame')
 
