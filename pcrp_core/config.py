@@ -382,6 +382,25 @@ class InstanceOptions(Options):
         "Also refine the answer turned half about each of its object's principal axes "
         '(about the up axis alone when gravity is given), keeping the best fit.',
     )
+    local_shape_cost: float = setting(
+        0.5,
+        'An answer costing more than this (a poor fit: the object partly hidden, or not in the '
+        'gallery) is looked for again from matched local shape (FPFH in RANSAC); infinity '
+        'never.',
+        low=0.0,
+    )
+    local_shape_objects: int = setting(
+        12, "Objects looked for then: those whose views have the cloud's shape, nearest first.",
+        low=1,
+    )
+    local_shape_voxel: float = setting(
+        0.005, 'Grid, metres, both clouds are thinned on for it.', low=0.0, low_open=True
+    )
+    local_shape_radius: float = setting(
+        0.025, 'Radius, metres, of the surface patch each FPFH describes.', low=0.0,
+        low_open=True,
+    )
+    local_shape_iterations: int = setting(5000, 'RANSAC draws per object.', low=1)
     fit_tolerance: float = setting(
         0.003,
         'Least distance, metres, beyond which a point counts as unexplained.',

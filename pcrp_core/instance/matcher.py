@@ -25,13 +25,16 @@ Which known object a camera's cloud shows, and its pose: the steps of the instan
    best other object is much of how sure it can be (confidence.py).
 5. Half turns: the answer turned half about each of its object's axes, refined and judged too,
    since a nearly symmetric object is often answered turned (best_half_turn).
+6. Local shape: an answer that still fits poorly (an object partly hidden: its visible centroid
+   and silhouette misled step 2) has the shortlisted objects placed again from FPFH matches in
+   RANSAC (local_shape.py), refined and judged alike (from_local_shape).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
-from pcrp_core.instance import hypotheses
+from pcrp_core.instance import hypotheses, local_shape
 from pcrp_core.instance.shape_index import ShapeIndex
 from pcrp_core.instance.templates import shape_code, Templates
 from pcrp_core.instance.verification import Fit, judge, query_surface, Surface, visible_points
@@ -78,6 +81,12 @@ class InstanceMatcher:
         # each object's tree and Open3D cloud, made when it is first shortlisted: a large gallery
         # loads at once, and only the objects a stream meets take memory
         self._surfaces: dict[int, tuple[Surface, object]] = {}
+        self._local_shapes: dict[tuple, local_shape.LocalShape] = {}
+
+    def __getstate__(self):
+        # the caches hold Open3D objects, which do not pickle (a build hands the model to worker
+        # processes): a worker makes its own as it goes
+        return {**self.__dict__, '_surfaces': {}, '_local_shapes': {}}
 
     def surface(self, i: int) -> tuple[Surface, object]:
         """Object i's Surface (tree, normals, spacing) and Open3D cloud with normals, for ICP."""
@@ -99,6 +108,16 @@ class InstanceMatcher:
             )
         return self._surfaces[i]
 
+    def local_shape(self, i: int, voxel: float, radius: float) -> local_shape.LocalShape:
+        """Object i's FPFH on its surface points, made when first asked for (like surface())."""
+        key = (i, voxel, radius)
+        if key not in self._local_shapes:
+            tpl = self.templates
+            self._local_shapes[key] = local_shape.of_object(
+                tpl.points[i], tpl.normals[i], voxel, radius
+            )
+        return self._local_shapes[key]
+
     def shortlist(self, shape: np.ndarray, opts, exclude=()) -> np.ndarray:
         """Return the opts.shortlist objects of smallest gap (ShapeIndex), nearest first."""
         return self.shapes.nearest(shape, opts.shortlist, opts.smaller_weight, exclude)[0]
@@ -113,6 +132,11 @@ class InstanceMatcher:
         R, t = icp_point_to_plane(source, self.surface(i)[1], R, t + R @ c, stages)
         return R, t - R @ c
 
+    def stages(self, i: int, tau: float) -> tuple:
+        """ICP stages for a hypothesis of object i: from a reach set by its size, down to tau."""
+        reach = float(np.clip(0.15 * self.templates.diameter[i], 2 * tau, 0.03))
+        return ((reach, reach / 2, 30), (2 * tau, tau, 20))
+
     def verify(self, i: int, R: np.ndarray, t: np.ndarray, query: Surface, tau: float,
                opts) -> Candidate:
         """Return object i at pose (R, t) judged against the query (verification.py)."""
@@ -120,6 +144,31 @@ class InstanceMatcher:
         expected = visible_points(tpl.visible[i], self.directions, tpl.centre[i], R, t)
         return Candidate(i, R, t, judge(query, self.surface(i)[0], expected, R, t, tau,
                                         opts.unshown_weight))
+
+    def from_local_shape(self, order: list[Candidate], objects, points: np.ndarray,
+                         query: Surface, source, tau: float, opts, up=None,
+                         up_object=None) -> list[Candidate]:
+        """
+        Return order with each of objects placed from matched local shape, where that fits better.
+
+        objects: gallery indices. A new answer gets its half turns.
+        """
+        voxel, radius = opts.local_shape_voxel, opts.local_shape_radius
+        cloud = local_shape.of_cloud(points, voxel, radius)
+        best_of = {c.index: c for c in order}
+        first = order[0]
+        for i in objects:
+            R, t = local_shape.pose(cloud, self.local_shape(i, voxel, radius), 1.5 * voxel,
+                                    opts.local_shape_iterations, seed=int(i))
+            R, t = self.refine(i, R, t, source, self.stages(i, tau))
+            candidate = self.verify(i, R, t, query, tau, opts)
+            if i not in best_of or candidate.fit.cost < best_of[i].fit.cost:
+                best_of[i] = candidate
+        order = sorted(best_of.values(), key=lambda c: c.fit.cost)
+        if opts.half_turns and order[0] is not first:
+            order[0] = self.best_half_turn(order[0], query, source, tau, opts,
+                                           up_object if up is not None else None)
+        return order
 
     def best_half_turn(self, best: Candidate, query: Surface, source, tau: float, opts,
                        up_object=None) -> Candidate:
@@ -202,10 +251,8 @@ class InstanceMatcher:
             r for r in ranked[: opts.objects_refined] if r[0] <= opts.coarse_ratio * ranked[0][0]
         ]
         for _, i, Rs, ts in within:
-            reach = float(np.clip(0.15 * tpl.diameter[i], 2 * tau, 0.03))
-            stages = ((reach, reach / 2, 30), (2 * tau, tau, 20))
             for R, t in zip(Rs, ts):
-                R, t = self.refine(i, R, t, source, stages)
+                R, t = self.refine(i, R, t, source, self.stages(i, tau))
                 clock.lap('refinement')
                 candidate = self.verify(i, R, t, query, tau, opts)
                 if i not in best_of or candidate.fit.cost < best_of[i].fit.cost:
@@ -217,6 +264,14 @@ class InstanceMatcher:
                 order[0], query, source, tau, opts, up_object if up is not None else None
             )
             clock.lap('verification')
+        if order[0].fit.cost > opts.local_shape_cost:
+            # by shape again, further down than the shortlist: a hidden part shrinks the view,
+            # and the right object then ranks a little lower than when seen whole
+            objects = self.shapes.nearest(shape, opts.local_shape_objects, opts.smaller_weight,
+                                          exclude)[0]
+            order = self.from_local_shape(order, objects, points, query, source, tau, opts, up,
+                                          up_object)
+            clock.lap('local_shape')
         gap = self.shapes.gaps(shape, opts.smaller_weight, [order[0].index])[0]
         return Match(order[0], order[1:], tau, noise, float(gap),
                      [(c, i) for c, i, _, _ in ranked])
