@@ -500,16 +500,24 @@ def _sweep(res: dict) -> str:
 
 def _stages(res: dict, summaries: dict) -> str:
     keys = list(dict.fromkeys(k for per in summaries.values()
-                              for k in per['pcrp']['stages']))
+                              for k in per['pcrp']['stages'] if k != 'total')) + ['total']
     rows = []
     for name, per in summaries.items():
         st = per['pcrp']['stages']
         s = per['pcrp']['overall']
-        rows.append([_title(name)] + [_num(st.get(k, float('nan')) * 1000, 1) for k in keys]
+        views = res['results'][name]['pcrp']
+        cells = []
+        for k in keys:
+            ran = sum(k in (v.get('timings') or {}) for v in views)
+            cells.append(_num(st.get(k, float('nan')) * 1000, 1)
+                         + (f' ({ran} of {len(views)})' if 0 < ran < len(views) else ''))
+        rows.append([_title(name)] + cells
                     + [_num(s['seconds_median'] * 1000, 0), _num(s['seconds_p95'] * 1000, 0)])
     return ("pcrp's seconds per view on one core (OMP/BLAS threads 1), wall time of "
             '`model.estimate`; per stage, the mean of `result.timings` (milliseconds; total '
-            "is the model's own count, the median and p95 are the caller's):\n\n"
+            "is the model's own count, the median and p95 are the caller's). A stage that only "
+            'some views run (local_shape: answers that fit poorly) is the mean over those, with '
+            'how many:\n\n'
             + _table(['scenario'] + keys + ['median', 'p95'], rows))
 
 
