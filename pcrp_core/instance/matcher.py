@@ -26,8 +26,8 @@ Which known object a camera's cloud shows, and its pose: the steps of the instan
 5. Half turns: the answer turned half about each of its object's axes, refined and judged too,
    since a nearly symmetric object is often answered turned (best_half_turn).
 6. Local shape: an answer that still fits poorly (an object partly hidden: its visible centroid
-   and silhouette misled step 2) has the shortlisted objects placed again from FPFH matches in
-   RANSAC (local_shape.py), refined and judged alike (from_local_shape).
+   and silhouette misled step 2) has the objects nearest the cloud's shape placed again from
+   FPFH matches in RANSAC (local_shape.py), refined and judged alike (from_local_shape).
 """
 from __future__ import annotations
 
