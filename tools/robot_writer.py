@@ -499,8 +499,9 @@ def _sweep(res: dict) -> str:
 
 
 def _stages(res: dict, summaries: dict) -> str:
-    keys = list(dict.fromkeys(k for per in summaries.values()
-                              for k in per['pcrp']['stages'] if k != 'total')) + ['total']
+    keys = list(dict.fromkeys(k for per in summaries.values() for k in per['pcrp']['stages']))
+    if 'total' in keys:     # last, after stages only some views ran
+        keys = [k for k in keys if k != 'total'] + ['total']
     rows = []
     for name, per in summaries.items():
         st = per['pcrp']['stages']
