@@ -19,7 +19,7 @@ import numpy as np
 import open3d as o3d
 from pcrp_core.confidence import expected_calibration_error, fit_calibration, reliability
 from pcrp_core.config import InstanceOptions
-from pcrp_core.geometry import rotation_taking
+from pcrp_core.geometry import rotation_angle_deg, rotation_taking
 from pcrp_core.instance import hypotheses
 from pcrp_core.instance.matcher import Candidate, InstanceMatcher
 from pcrp_core.instance.shape_index import ShapeIndex
@@ -213,8 +213,7 @@ def test_view_hypotheses_include_the_true_pose_of_a_brick(brick):
     )
     # a brick has four poses that look alike (its symmetries): any of them is right
     sym = [np.diag(d) for d in ([1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1])]
-    best = min(np.degrees(np.arccos(np.clip((np.trace(Rh.T @ R @ S) - 1) / 2, -1, 1)))
-               for Rh in Rs for S in sym)
+    best = min(rotation_angle_deg(Rh, R @ S) for Rh in Rs for S in sym)
     assert best < 25.0
 
 
@@ -239,7 +238,7 @@ def test_a_nubbed_brick_answered_turned_half_about_its_height_is_turned_back(up_
     )
     source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     back = matcher.best_half_turn(answer, query, source, 0.003, InstanceOptions(), up_object)
-    angle = np.degrees(np.arccos(np.clip((np.trace(back.R.T @ R) - 1) / 2, -1, 1)))
+    angle = rotation_angle_deg(back.R, R)
     assert angle < 2.0 and back.fit.cost < 0.5 * answer.fit.cost
     assert np.linalg.norm(back.t + back.R @ c - (t + R @ c)) < 0.002
     if up_object is not None:
@@ -275,10 +274,6 @@ def test_look_at_puts_the_target_on_the_optical_axis():
     R, t = look_at(np.array([0.3, -0.4, 0.5]), np.array([0.01, 0.02, 0.03]))
     p = R @ [0.01, 0.02, 0.03] + t
     assert abs(p[0]) < 1e-12 and abs(p[1]) < 1e-12 and p[2] > 0
-
-
-def _angle(Ra, Rb) -> float:
-    return float(np.degrees(np.arccos(np.clip((np.trace(Ra.T @ Rb) - 1) / 2, -1, 1))))
 
 
 def lumpy(seed: int) -> Mesh:
@@ -319,7 +314,7 @@ def test_local_shape_places_a_partly_hidden_object_that_was_answered_wrongly(hid
         order = matcher.from_local_shape([answer], [0], points, query, source, 0.003, opts)
     best = order[0]
     assert len(order) == 1 and best.fit.cost < 0.5 * answer.fit.cost
-    assert _angle(best.R, R) < 3.0
+    assert rotation_angle_deg(best.R, R) < 3.0
     c = tpl.centre[0]
     assert np.linalg.norm(best.t + best.R @ c - (t + R @ c)) < 0.003
 
