@@ -118,9 +118,10 @@ class InstanceMatcher:
             )
         return self._local_shapes[key]
 
-    def shortlist(self, shape: np.ndarray, opts, exclude=()) -> np.ndarray:
-        """Return the opts.shortlist objects of smallest gap (ShapeIndex), nearest first."""
-        return self.shapes.nearest(shape, opts.shortlist, opts.smaller_weight, exclude)[0]
+    def shortlist(self, shape: np.ndarray, opts, exclude=(), n=None) -> np.ndarray:
+        """Return the n (opts.shortlist) objects of smallest gap (ShapeIndex), nearest first."""
+        n = opts.shortlist if n is None else n
+        return self.shapes.nearest(shape, n, opts.smaller_weight, exclude)[0]
 
     def refine(self, i: int, R: np.ndarray, t: np.ndarray, source, stages):
         """
@@ -267,8 +268,7 @@ class InstanceMatcher:
         if order[0].fit.cost > opts.local_shape_cost:
             # by shape again, further down than the shortlist: a hidden part shrinks the view,
             # and the right object then ranks a little lower than when seen whole
-            objects = self.shapes.nearest(shape, opts.local_shape_objects, opts.smaller_weight,
-                                          exclude)[0]
+            objects = self.shortlist(shape, opts, exclude, opts.local_shape_objects)
             order = self.from_local_shape(order, objects, points, query, source, tau, opts, up,
                                           up_object)
             clock.lap('local_shape')
