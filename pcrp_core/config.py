@@ -393,6 +393,14 @@ class InstanceOptions(Options):
         12, "Objects looked for then: those whose views have the cloud's shape, nearest first.",
         low=1,
     )
+    local_shape_min_diameter: float = setting(
+        0.9,
+        'Of those, only objects whose diameter is at least this share of the extent of the '
+        "cloud's middle 99 % along its principal axes: a view shows at most all of its object. "
+        '0: all.',
+        low=0.0,
+        high=1.0,
+    )
     local_shape_voxel: float = setting(
         0.005, 'Grid, metres, both clouds are thinned on for it.', low=0.0, low_open=True
     )

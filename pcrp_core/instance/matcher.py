@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pcrp_core.instance import hypotheses, local_shape
 from pcrp_core.instance.shape_index import ShapeIndex
-from pcrp_core.instance.templates import shape_code, Templates
+from pcrp_core.instance.templates import extent, shape_code, Templates
 from pcrp_core.instance.verification import Fit, judge, query_surface, Surface, visible_points
 from pcrp_core.registration.icp import icp_point_to_plane
 from pcrp_core.timing import Clock
@@ -154,6 +154,8 @@ class InstanceMatcher:
 
         objects: gallery indices. A new answer gets its half turns.
         """
+        if not len(objects):
+            return order
         voxel, radius = opts.local_shape_voxel, opts.local_shape_radius
         cloud = local_shape.of_cloud(points, voxel, radius)
         best_of = {c.index: c for c in order}
@@ -269,6 +271,9 @@ class InstanceMatcher:
             # by shape again, further down than the shortlist: a hidden part shrinks the view,
             # and the right object then ranks a little lower than when seen whole
             objects = self.shortlist(shape, opts, exclude, opts.local_shape_objects)
+            # an object smaller than the view cannot be it, and its FPFH is as dear as any
+            floor = opts.local_shape_min_diameter * extent(points)
+            objects = [i for i in objects if tpl.diameter[i] >= floor]
             order = self.from_local_shape(order, objects, points, query, source, tau, opts, up,
                                           up_object)
             clock.lap('local_shape')

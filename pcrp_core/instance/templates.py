@@ -44,6 +44,21 @@ def spread(points: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum(eig, 0.0))[::-1]
 
 
+def extent(points: np.ndarray, share: float = 0.99) -> float:
+    """
+    Return the longest extent along the principal axes of the middle share of the points.
+
+    A lower bound of the diameter of whatever the points lie on: no view shows more of an object
+    than all of it. Percentiles rather than the ends, so that a few stray points at the edge of a
+    segment do not stretch it.
+    """
+    centred = points - points.mean(axis=0)
+    along = centred @ np.linalg.eigh(centred.T @ centred)[1]
+    q = 50.0 * (1.0 - share)
+    low, high = np.percentile(along, [q, 100.0 - q], axis=0)
+    return float(np.max(high - low))
+
+
 def shape_code(points: np.ndarray) -> np.ndarray:
     """
     Return the spread in log metres.

@@ -20,11 +20,13 @@ import open3d as o3d
 from pcrp_core.confidence import expected_calibration_error, fit_calibration, reliability
 from pcrp_core.config import InstanceOptions
 from pcrp_core.geometry import rotation_angle_deg, rotation_taking
-from pcrp_core.instance import hypotheses
+from pcrp_core.instance import hypotheses, local_shape
 from pcrp_core.instance.matcher import Candidate, InstanceMatcher
 from pcrp_core.instance.shape_index import ShapeIndex
 from pcrp_core.instance.signatures import ray_frame, SECTORS, shift_costs, signature
-from pcrp_core.instance.templates import object_templates, stack, Templates, TemplateSettings
+from pcrp_core.instance.templates import (
+    extent, object_templates, stack, Templates, TemplateSettings
+)
 from pcrp_core.instance.verification import (distances, judge, query_surface, Surface,
                                              visible_points)
 from pcrp_core.sources.camera import look_at, Mesh, MeshCamera
@@ -328,3 +330,34 @@ def test_local_shape_is_looked_for_only_when_the_answer_fits_worse_than_its_cost
         matcher.match(points, InstanceOptions(local_shape_cost=cost), timings=timings)
         ran[cost] = 'local_shape' in timings
     assert ran == {0.0: True, float('inf'): False}
+
+
+def test_a_views_extent_bounds_its_objects_diameter_from_below_whatever_strays_in():
+    mesh = lumpy(1)
+    camera = MeshCamera(mesh)
+    for seed in range(5):
+        R = Rotation.random(random_state=seed).as_matrix()
+        seen = camera.view(R, np.array([0.0, 0.0, 0.5]))
+        assert 0.5 * mesh.diameter < extent(seen) <= mesh.diameter
+        # a few points off the segment's edge (a flying pixel, a bit of the table) do not count
+        strays = seen[:3] + [0.0, 0.0, 2 * mesh.diameter]
+        assert extent(np.vstack([seen, strays])) <= mesh.diameter
+
+
+def test_local_shape_leaves_out_objects_smaller_than_the_view(hidden_egg, monkeypatch):
+    _, _, _, points = hidden_egg
+    egg = lumpy(0)
+    small = Mesh(0.5 * egg.vertices, egg.triangles)
+    matcher = InstanceMatcher(stack([object_templates(m, SMALL) for m in (egg, small)]))
+    tried = []
+    pose = local_shape.pose
+    monkeypatch.setattr(local_shape, 'pose', lambda c, o, *a, **k: tried.append(o) or pose(
+        c, o, *a, **k))
+    for share, expected in ((0.9, [0]), (0.0, [0, 1])):
+        opts = InstanceOptions(local_shape_cost=0.0, local_shape_min_diameter=share)
+        tried.clear()
+        with one_open3d_thread():
+            matcher.match(points, opts)
+        shapes = [matcher.local_shape(i, opts.local_shape_voxel, opts.local_shape_radius)
+                  for i in expected]
+        assert sorted(map(id, tried)) == sorted(map(id, shapes))
