@@ -77,7 +77,7 @@ def load_engine(path: str, params: dict, up, workers: int, model=None) -> Engine
     if up is not None:
         model.check_up(up)
     if workers == 1:
-        return Engine(model, path, [LocalEstimator(model)])
+        return Engine(model.warm(), path, [LocalEstimator(model)])
     started = []
     try:
         # started together, so they load side by side

@@ -72,7 +72,7 @@ def _worker_main(conn, model_path, params):
         from pcrp_core import PCRP
 
         model = PCRP.load(model_path or None)
-        model.set_params(**params)
+        model.set_params(**params).warm()
     except Exception as e:  # reported to the node, which decides
         conn.send(('error', f'{type(e).__name__}: {e}'))
         return

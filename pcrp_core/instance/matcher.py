@@ -118,6 +118,12 @@ class InstanceMatcher:
             )
         return self._local_shapes[key]
 
+    def warm(self, opts) -> None:
+        """Make every object's surface() and local_shape() (with opts' grid and radius) now."""
+        for i in range(len(self.templates)):
+            self.surface(i)
+            self.local_shape(i, opts.local_shape_voxel, opts.local_shape_radius)
+
     def shortlist(self, shape: np.ndarray, opts, exclude=(), n=None) -> np.ndarray:
         """Return the n (opts.shortlist) objects of smallest gap (ShapeIndex), nearest first."""
         n = opts.shortlist if n is None else n

@@ -361,3 +361,19 @@ def test_local_shape_leaves_out_objects_smaller_than_the_view(hidden_egg, monkey
         shapes = [matcher.local_shape(i, opts.local_shape_voxel, opts.local_shape_radius)
                   for i in expected]
         assert sorted(map(id, tried)) == sorted(map(id, shapes))
+
+
+def test_a_warm_matcher_makes_no_object_features_for_a_poor_fit(hidden_egg, monkeypatch):
+    tpl, _, _, points = hidden_egg
+    made = []
+    of_object = local_shape.of_object
+    monkeypatch.setattr(local_shape, 'of_object', lambda *a: made.append(1) or of_object(*a))
+    opts = InstanceOptions(local_shape_cost=0.0)
+    for warm, expected in ((False, 1), (True, 0)):
+        matcher = InstanceMatcher(tpl)
+        if warm:
+            matcher.warm(opts)
+        made.clear()
+        with one_open3d_thread():
+            matcher.match(points, opts)
+        assert len(made) == expected
