@@ -52,6 +52,7 @@ FEATURES = (
     'off_noise',
     'missing_noise',
     'shape_gap',
+    'searched',
 )
 TWIN_RATIO = 1.4
 POSE_RIGHT = 0.1   # of the object's diameter, as ADD-S counts it
@@ -78,6 +79,7 @@ def features(match, n_points: int) -> dict:
         'off_noise': best.median_off / noise,
         'missing_noise': best.median_missing / noise,
         'shape_gap': match.shape_gap,
+        'searched': match.searched,
     }
 
 

@@ -69,6 +69,10 @@ class Match:
     # gallery lacks is often answered by one of another size
     shape_gap: float
     coarse: list = field(default_factory=list)   # (coarse cost, object index), best first
+    # log of how many times better local shape made the answer fit (0: not run, or no better): a
+    # poor fit gets a dozen more objects to try, and what a fit found so is worth, the
+    # calibration learns
+    searched: float = 0.0
 
 
 class InstanceMatcher:
@@ -273,7 +277,8 @@ class InstanceMatcher:
                 order[0], query, source, tau, opts, up_object if up is not None else None
             )
             clock.lap('verification')
-        if order[0].fit.cost > opts.local_shape_cost:
+        before = order[0].fit.cost
+        if before > opts.local_shape_cost:
             # by shape again, further down than the shortlist: a hidden part shrinks the view,
             # and the right object then ranks a little lower than when seen whole
             objects = self.shortlist(shape, opts, exclude, opts.local_shape_objects)
@@ -285,4 +290,5 @@ class InstanceMatcher:
             clock.lap('local_shape')
         gap = self.shapes.gaps(shape, opts.smaller_weight, [order[0].index])[0]
         return Match(order[0], order[1:], tau, noise, float(gap),
-                     [(c, i) for c, i, _, _ in ranked])
+                     [(c, i) for c, i, _, _ in ranked],
+                     float(np.log(max(before, 1e-9) / max(order[0].fit.cost, 1e-9))))
