@@ -42,17 +42,24 @@ def farthest_point_sampling(points: np.ndarray, m: int) -> np.ndarray:
 
     Starts from the point farthest from the centroid so the choice, and with it every
     feature built on the sampled set, does not depend on the cloud's pose or point order.
-    Open3D does the sampling (about 40x faster than a numpy loop); it returns points, so
-    their indices are looked up again, exactly.
     """
     n = len(points)
     if m >= n:
         return np.arange(n)
+    _, idx = cKDTree(points).query(_farthest_points(points, m))
+    return np.asarray(idx, dtype=np.int64)
+
+
+def _farthest_points(points: np.ndarray, m: int) -> np.ndarray:
+    """
+    Return the points farthest_point_sampling picks, in the cloud's order.
+
+    Open3D does the sampling (about 40x faster than a numpy loop); it returns the points
+    themselves, unordered by pick, so their indices have to be looked up again.
+    """
     start = int(np.argmax(((points - points.mean(axis=0)) ** 2).sum(axis=1)))
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-    picked = np.asarray(pcd.farthest_point_down_sample(m, start).points)
-    _, idx = cKDTree(points).query(picked)
-    return np.asarray(idx, dtype=np.int64)
+    return np.asarray(pcd.farthest_point_down_sample(m, start).points)
 
 
 def merge_duplicates(points: np.ndarray, resolution: float = 0.005) -> np.ndarray:
@@ -72,7 +79,12 @@ def merge_duplicates(points: np.ndarray, resolution: float = 0.005) -> np.ndarra
     radius = np.sqrt(((points - points.mean(axis=0)) ** 2).sum(axis=1).mean())
     if radius <= 0:
         return points[:1]
-    pairs = cKDTree(points).query_pairs(resolution * radius, output_type='ndarray')
+    return _thinned(points, resolution * radius)
+
+
+def _thinned(points: np.ndarray, distance: float) -> np.ndarray:
+    """Drop every point within distance of an earlier kept one."""
+    pairs = cKDTree(points).query_pairs(distance, output_type='ndarray')
     if len(pairs) == 0:
         return points
     # first come first kept: walk the points that have later neighbours in order (few, in a
@@ -104,7 +116,29 @@ def spread(points: np.ndarray, max_points: int) -> np.ndarray:
     """At most max_points by farthest-point sampling, the costly step of downsample."""
     if len(points) <= max_points:
         return points
-    return points[farthest_point_sampling(points, max_points)]
+    return _unclumped(points, _farthest_points(points, max_points), max_points)
+
+
+def _unclumped(points: np.ndarray, picked: np.ndarray, max_points: int) -> np.ndarray:
+    """
+    Return the picks, less those that only fill clumps of the cloud.
+
+    A few hundred surface points each repeated with sensor jitter (a cloud resampled to a
+    million, merged exposures) outlast merge_duplicates when the jitter spans its distance;
+    farthest-point sampling then takes one point a clump and spends the rest of its budget
+    inside the clumps, so the query's spacing reads ten times finer than its surface. Each
+    pick lies farther from the earlier ones than the next does, so the first quarter of the
+    picks are all at least the quarter's last distance apart, and all the picks at least the
+    last pick's. Over a surface that distance halves from a quarter of the budget to all of
+    it, over a curve it quarters; a last distance under an eighth of the quarter's is a
+    clump. Then keep the first quarter and of the rest what lies as far apart as an eighth
+    of it. Any other cloud comes back as picked (0.8 ms more on a 3,000-point view).
+    """
+    quarter = _farthest_points(points, max(2, max_points // 4))
+    spacing = cKDTree(quarter).query(quarter, k=2)[0][:, 1].min()
+    if cKDTree(picked).query(picked, k=2)[0][:, 1].min() >= spacing / 8:
+        return picked
+    return _thinned(np.concatenate([quarter, picked]), spacing / 8)
 
 
 def downsample(points: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
