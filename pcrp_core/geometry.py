@@ -67,6 +67,18 @@ def rms_radius(points: np.ndarray) -> float:
     return float(np.sqrt(((points - points.mean(axis=0)) ** 2).sum(axis=1).mean()))
 
 
+def diameter(points: np.ndarray) -> float:
+    """Largest distance between two points (exact over the convex hull's vertices)."""
+    from scipy.spatial import ConvexHull
+    from scipy.spatial.distance import pdist
+
+    try:
+        points = points[ConvexHull(points).vertices]
+    except Exception:   # flat or degenerate: all points, still exact
+        pass
+    return float(pdist(points).max()) if len(points) > 1 else 0.0
+
+
 def unit_vector(v) -> np.ndarray | None:
     """Return v scaled to length 1, None unless it is a finite, non-zero 3-vector."""
     v = np.asarray(v, dtype=np.float64).reshape(-1)

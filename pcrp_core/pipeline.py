@@ -357,9 +357,10 @@ class PCRP:
 
         Each object's ICP surface and local-shape features, when the gallery has at most
         WARM_OBJECTS objects: made on first use, they would cost the first poorly fitting cloud
-        about 30 ms an object, which a node at sensor rate cannot give.
+        about 30 ms an object, which a node at sensor rate cannot give. Nothing when the
+        settings never match view by view (the paper's method, unit scale).
         """
-        if self.templates is not None and len(self.templates) <= WARM_OBJECTS:
+        if self.uses_views(np.zeros(3)) and len(self.templates) <= WARM_OBJECTS:
             self.matcher.warm(self.instance_options)
         return self
 

@@ -36,9 +36,8 @@ import time
 
 import numpy as np
 import open3d as o3d
+from pcrp_core.geometry import diameter
 from pcrp_core.sources.camera import Mesh
-from scipy.spatial import ConvexHull
-from scipy.spatial.distance import pdist
 
 REG = o3d.pipelines.registration
 VOXEL = 0.005
@@ -103,15 +102,6 @@ def target(mesh: Mesh, seed: int = 0) -> Target:
     return Target(pcd, _fpfh(pcd), mesh.diameter)
 
 
-def extent(points: np.ndarray) -> float:
-    """Largest distance between two points (over the convex hull's vertices)."""
-    try:
-        points = points[ConvexHull(points).vertices]
-    except Exception:   # flat or degenerate: all points
-        pass
-    return float(pdist(points).max()) if len(points) > 1 else 0.0
-
-
 def query(points: np.ndarray):
     """
     (cloud, FPFH, extent) of a view in the camera's frame.
@@ -122,7 +112,7 @@ def query(points: np.ndarray):
     pcd = pcd.voxel_down_sample(VOXEL)
     pcd.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=NORMAL_RADIUS, max_nn=30))
     pcd.orient_normals_towards_camera_location(np.zeros(3))
-    return pcd, _fpfh(pcd), extent(np.asarray(pcd.points))
+    return pcd, _fpfh(pcd), diameter(np.asarray(pcd.points))
 
 
 def coarse(method: str, q, tgt: Target, seed: int = 0) -> np.ndarray:

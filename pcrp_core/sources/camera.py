@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from pcrp_core.geometry import diameter
 
 
 @dataclass(frozen=True)
@@ -109,16 +110,8 @@ class Mesh:
 
     @property
     def diameter(self) -> float:
-        """Largest distance between two vertices (exact over the convex hull's vertices)."""
-        from scipy.spatial import ConvexHull
-        from scipy.spatial.distance import pdist
-
-        v = self.vertices
-        try:
-            v = v[ConvexHull(v).vertices]
-        except Exception:   # flat or degenerate: all vertices, still exact
-            pass
-        return float(pdist(v).max()) if len(v) > 1 else 0.0
+        """Largest distance between two vertices."""
+        return diameter(self.vertices)
 
     def sample(self, n: int, seed: int = 0) -> np.ndarray:
         """

@@ -18,6 +18,7 @@ import open3d as o3d
 from pcrp_core import PCRP
 from pcrp_core.evaluation.metrics import add_s
 from pcrp_core.evaluation.scenes import sample_scene
+from pcrp_core.instance.matcher import InstanceMatcher
 from pcrp_core.sources.camera import Mesh
 from pcrp_core.sources.gallery_object import GalleryObject
 import pytest
@@ -87,6 +88,16 @@ def test_the_paper_pipeline_is_still_selectable_on_a_model_of_meshes(mesh_model)
     assert not paper.uses_views(np.zeros(3))
     r = paper.estimate(scene.points, viewpoint=np.zeros(3))
     assert r.gallery_id in model.gallery_ids and 'description' not in r.timings
+
+
+def test_only_a_model_that_matches_view_by_view_is_warmed(mesh_model, monkeypatch):
+    model, _ = mesh_model
+    warmed = []
+    monkeypatch.setattr(InstanceMatcher, 'warm', lambda self, opts: warmed.append(opts))
+    model.with_options(method='pcrp').warm()
+    assert warmed == []
+    model.with_options(method='auto').warm()
+    assert len(warmed) == 1
 
 
 def test_an_object_the_gallery_does_not_hold_is_less_sure_than_one_it_does(mesh_model):
