@@ -132,13 +132,13 @@ def _unclumped(points: np.ndarray, picked: np.ndarray, max_points: int) -> np.nd
     last pick's. Over a surface that distance halves from a quarter of the budget to all of
     it, over a curve it quarters; a last distance under an eighth of the quarter's is a
     clump. Then keep the first quarter and of the rest what lies as far apart as an eighth
-    of it. Any other cloud comes back as picked (0.8 ms more on a 3,000-point view).
+    of it. Any other cloud comes back as picked (1.3 ms more on a 3,000-point view).
     """
     quarter = _farthest_points(points, max(2, max_points // 4))
-    spacing = cKDTree(quarter).query(quarter, k=2)[0][:, 1].min()
-    if cKDTree(picked).query(picked, k=2)[0][:, 1].min() >= spacing / 8:
+    apart = cKDTree(quarter).query(quarter, k=2)[0][:, 1].min() / 8
+    if not len(cKDTree(picked).query_pairs(apart, output_type='ndarray')):
         return picked
-    return _thinned(np.concatenate([quarter, picked]), spacing / 8)
+    return _thinned(np.concatenate([quarter, picked]), apart)
 
 
 def downsample(points: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
