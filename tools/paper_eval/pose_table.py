@@ -66,20 +66,17 @@ def pose_one(state: dict, q) -> dict:
     r = model.estimate(q.points, viewpoint=q.viewpoint)
     row = {'name': q.name, 'category': q.category, 'retrieved': r.gallery_id,
            'retrieved_category': r.category, 'confidence': r.confidence,
-           'rejected': bool(r.rejected),
-           'pcrp': {**pose_error(r.rotation, q.R, q.category), 'seconds': r.timings['total']}}
+           'rejected': bool(r.rejected), 'pcrp': _scored(r, q)}
     if 'pcrp_paper' in state['methods']:
-        p = paper_variant(model).estimate(q.points, viewpoint=q.viewpoint)
-        row['pcrp_paper'] = {
-            **pose_error(p.rotation, q.R, q.category), 'seconds': p.timings['total']
-        }
+        row['pcrp_paper'] = _scored(
+            paper_variant(model).estimate(q.points, viewpoint=q.viewpoint), q
+        )
     if 'pcrp_up' in state['methods']:
-        # the up direction a robot reads from gravity: the gallery's up axis as the query carries
-        # it
-        u = model.estimate(q.points, viewpoint=q.viewpoint, up=q.R @ model.up_axis)
-        row['pcrp_up'] = {
-            **pose_error(u.rotation, q.R, q.category), 'seconds': u.timings['total']
-        }
+        # the up direction a robot reads from gravity: the gallery's up axis as the query
+        # carries it
+        row['pcrp_up'] = _scored(
+            model.estimate(q.points, viewpoint=q.viewpoint, up=q.R @ model.up_axis), q
+        )
     wanted = [m for m in BASELINES if m in state['methods']]
     if wanted:
         target = o3d_pipes.prepare_target(model.gallery_cloud(r.gallery_id).astype(np.float64))
@@ -87,6 +84,11 @@ def pose_one(state: dict, q) -> dict:
             (R, _), seconds = timed(open3d_pose, BASELINES[m], q.points, target)
             row[m] = {**pose_error(R, q.R, q.category), 'seconds': seconds}
     return row
+
+
+def _scored(result, q) -> dict:
+    """Return a pcrp answer's pose errors against the query's truth, and its seconds."""
+    return {**pose_error(result.rotation, q.R, q.category), 'seconds': result.timings['total']}
 
 
 def summarise(rows: list[dict], methods) -> dict:

@@ -167,7 +167,7 @@ def rejection_md(rj: dict) -> list[str]:
 
     Beside the raw figures, those with airplane and car errors taken up to their labels.
     """
-    threshold = rj.get('min_confidence', rj.get('min_score'))  # the key's name before 2026-12-04
+    threshold = rj['min_confidence']
     t = rj.get('tolerant', {})
 
     def row(label: str, key: str) -> str:
