@@ -73,16 +73,18 @@ def code_key() -> str:
     """
     Return a name for the code that builds a model.
 
-    The content of the package's files (committed or not, less the report-only modules), so the
-    same code has the same name before and after it is committed. A model cached under another key
-    was built by other code, so is built again.
+    The content of the package's source files (committed or not, less the report-only modules),
+    so the same code has the same name before and after it is committed. A model cached under
+    another key was built by other code, so is built again. The shipped model (pcrp_core/data) is
+    what a build makes, not what makes one: rebuilding it renames no cached model.
     """
     try:
         names = _git('ls-files', '--cached', '--others', '--exclude-standard', '--', 'pcrp_core')
     except (OSError, RuntimeError):    # not a checkout: the installed version names the code
         return 'pcrp-' + metadata.version('pcrp')
     digest = hashlib.sha1()
-    for name in sorted(set(names.splitlines()) - set(NOT_BUILD_CODE)):
+    sources = {n for n in names.splitlines() if n.endswith('.py')}
+    for name in sorted(sources - set(NOT_BUILD_CODE)):
         path = REPO / name
         if path.is_file():   # a file deleted but not yet committed is listed too
             digest.update(name.encode() + b'\0' + path.read_bytes() + b'\0')

@@ -49,6 +49,10 @@ def test_a_change_to_model_code_changes_the_key_and_to_a_report_does_not(checkou
     before = provenance.code_key()
     (checkout / 'pcrp_core' / 'evaluation' / 'run.py').write_text('REPORT = 2\n')
     assert provenance.code_key() == before
+    # nor does a rebuilt shipped model: what a build makes, not what makes one
+    (checkout / 'pcrp_core' / 'data').mkdir()
+    (checkout / 'pcrp_core' / 'data' / 'model.json').write_text('{}\n')
+    assert provenance.code_key() == before
     (checkout / 'pcrp_core' / 'matcher.py').write_text('A = 2\n')
     changed = provenance.code_key()
     assert changed != before
