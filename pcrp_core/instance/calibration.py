@@ -53,7 +53,6 @@ FEATURES = (
     'missing_noise',
     'shape_gap',
     'searched',
-    'seen_through',
 )
 TWIN_RATIO = 1.4
 POSE_RIGHT = 0.1   # of the object's diameter, as ADD-S counts it
@@ -81,7 +80,6 @@ def features(match, n_points: int) -> dict:
         'missing_noise': best.median_missing / noise,
         'shape_gap': match.shape_gap,
         'searched': match.searched,
-        'seen_through': match.seen_through,
     }
 
 

@@ -37,9 +37,7 @@ import numpy as np
 from pcrp_core.instance import hypotheses, local_shape
 from pcrp_core.instance.shape_index import ShapeIndex
 from pcrp_core.instance.templates import extent, shape_code, Templates
-from pcrp_core.instance.verification import (
-    Fit, judge, query_surface, seen_through, Surface, visible_points
-)
+from pcrp_core.instance.verification import Fit, judge, query_surface, Surface, visible_points
 from pcrp_core.registration.icp import icp_point_to_plane
 from pcrp_core.timing import Clock
 from scipy.spatial import cKDTree
@@ -75,9 +73,6 @@ class Match:
     # poor fit gets a dozen more objects to try, and what a fit found so is worth, the
     # calibration learns
     searched: float = 0.0
-    # share of the answer's expected surface the camera saw through (verification.seen_through):
-    # what an occluder cannot explain
-    seen_through: float = 0.0
 
 
 class InstanceMatcher:
@@ -293,11 +288,7 @@ class InstanceMatcher:
             order = self.from_local_shape(order, objects, points, query, source, tau, opts, up,
                                           up_object)
             clock.lap('local_shape')
-        best = order[0]
-        gap = self.shapes.gaps(shape, opts.smaller_weight, [best.index])[0]
-        expected = visible_points(tpl.visible[best.index], self.directions,
-                                  tpl.centre[best.index], best.R, best.t)
-        through = seen_through(query, tpl.points[best.index][expected] @ best.R.T + best.t, tau)
-        return Match(best, order[1:], tau, noise, float(gap),
+        gap = self.shapes.gaps(shape, opts.smaller_weight, [order[0].index])[0]
+        return Match(order[0], order[1:], tau, noise, float(gap),
                      [(c, i) for c, i, _, _ in ranked],
-                     float(np.log(max(before, 1e-9) / max(best.fit.cost, 1e-9))), through)
+                     float(np.log(max(before, 1e-9) / max(order[0].fit.cost, 1e-9))))

@@ -133,35 +133,3 @@ def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray,
     return Fit(unexplained + unshown_weight * unshown, unexplained, unshown, float(inside.mean()),
                float(np.mean(to_query < tau)), rms, len(expected), float(np.median(to_object)),
                float(np.median(to_query)))
-
-
-def seen_through(query: Surface, expected: np.ndarray, tau: float) -> float:
-    """
-    Return the share of the expected surface the camera saw through.
-
-    Both in the camera's frame (camera at the origin, looking along +z); expected: the posed
-    object's surface points the camera would see. A point in the line of sight of the cloud
-    (within its own angular spacing) that lies more than tau in front of the tangent plane of
-    every cloud point around its ray cannot be there: the camera measured the surface behind it.
-    Unlike a missing point, which something in front may have hidden or the segmenter cut away,
-    this contradicts the pose. Every plane around, because at a depth edge some of them are the
-    farther surface's; planes the ray grazes do not count (a small turn moves them far).
-    """
-    cloud = query.points
-    front = cloud[:, 2] > 0
-    if len(expected) == 0 or front.sum() < 4:
-        return 0.0
-    cloud, normals = cloud[front], query.normals[front]
-    rays = cloud[:, :2] / cloud[:, 2:3]
-    tree = cKDTree(rays)
-    spacing = float(np.median(tree.query(rays, 2)[0][:, 1]))
-    ahead = expected[expected[:, 2] > 0]
-    d, j = tree.query(ahead[:, :2] / ahead[:, 2:3], 4, distance_upper_bound=1.5 * spacing)
-    near = np.isfinite(d)
-    q, n = cloud[np.where(near, j, 0)], normals[np.where(near, j, 0)]   # (M, 4, 3)
-    length = np.linalg.norm(ahead, axis=1)
-    facing = np.einsum('mj,mkj->mk', ahead, n) / length[:, None]   # cosine, ray to normal
-    usable = near & (np.abs(facing) > 0.3)
-    plane = np.einsum('mkj,mkj->mk', q, n) / np.where(usable, facing, 1.0)   # range on the ray
-    in_front = np.where(usable, length[:, None] < plane - tau, True).all(axis=1)
-    return float(np.count_nonzero(in_front & usable.any(axis=1)) / len(expected))

@@ -27,8 +27,8 @@ from pcrp_core.instance.signatures import ray_frame, SECTORS, shift_costs, signa
 from pcrp_core.instance.templates import (
     extent, object_templates, stack, Templates, TemplateSettings
 )
-from pcrp_core.instance.verification import (distances, judge, query_surface,
-                                             seen_through, Surface, visible_points)
+from pcrp_core.instance.verification import (distances, judge, query_surface, Surface,
+                                             visible_points)
 from pcrp_core.sources.camera import look_at, Mesh, MeshCamera
 from pcrp_core.sources.household import union
 from pcrp_core.threads import one_open3d_thread
@@ -205,28 +205,6 @@ def test_distances_to_a_plane_do_not_count_the_sampling_gap():
     # 7 mm from the nearest grid point, 2 mm off the plane
     between = np.array([[0.045, 0.055, 0.002]])
     assert distances(between, plane)[0] == pytest.approx(0.002)
-
-
-def _facing_plate(x0, x1, depth, step=0.004):
-    """Return a square plate facing the camera, depth metres away, its x from x0 to x1."""
-    x, y = np.meshgrid(np.arange(x0, x1, step), np.arange(-0.05, 0.05, step))
-    return np.c_[x.ravel(), y.ravel(), np.full(x.size, depth)]
-
-
-def test_a_surface_in_front_of_the_measured_one_was_seen_through_and_one_behind_was_not():
-    query, _ = query_surface(_facing_plate(-0.05, 0.05, 0.6))
-    inner = _facing_plate(-0.03, 0.03, 0.6, 0.006)
-    assert seen_through(query, inner, 0.003) == 0.0
-    assert seen_through(query, inner - [0, 0, 0.02], 0.003) == 1.0
-    assert seen_through(query, inner + [0, 0, 0.02], 0.003) == 0.0   # hidden behind: may be
-    assert seen_through(query, inner + [0.2, 0, 0], 0.003) == 0.0    # beside: may be hidden
-
-
-def test_a_nearer_surface_beside_a_farther_one_is_not_seen_through_at_their_edge():
-    # a step: the left half 5 cm nearer; the near half's own points, edge included, are there
-    near = _facing_plate(-0.05, 0.0, 0.55)
-    query, _ = query_surface(np.vstack([near, _facing_plate(0.0, 0.05, 0.6)]))
-    assert seen_through(query, near, 0.003) == 0.0
 
 
 def test_view_hypotheses_include_the_true_pose_of_a_brick(brick):
