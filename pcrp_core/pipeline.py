@@ -358,7 +358,7 @@ class PCRP:
         Each object's ICP surface and local-shape features, when the gallery has at most
         WARM_OBJECTS objects: made on first use, they would cost the first poorly fitting cloud
         about 30 ms an object, which a node at sensor rate cannot give. Nothing when the
-        settings never match view by view (the paper's method, unit scale).
+        settings never match view by view (method pcrp, or scale_mode normalize).
         """
         if self.uses_views(np.zeros(3)) and len(self.templates) <= WARM_OBJECTS:
             self.matcher.warm(self.instance_options)
