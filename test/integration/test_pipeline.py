@@ -161,7 +161,8 @@ def test_large_clouds_are_downsampled_and_answered(model):
     rng = np.random.default_rng(2)
     dense = np.repeat(p, 20, axis=0) + rng.normal(scale=1e-3, size=(len(p) * 20, 3))
     r = model.estimate(dense)
-    assert r.gallery_id == gid and r.n_points == model.options.max_points
+    # each point a clump of twenty: sampling keeps about one a clump, not the clumps' insides
+    assert r.gallery_id == gid and 0.9 * len(p) <= r.n_points <= model.options.max_points
 
 
 def test_a_gallery_object_seen_by_a_sensor_is_not_outvoted_by_relatives_facing_otherwise():
