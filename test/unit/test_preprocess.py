@@ -16,6 +16,7 @@
 import numpy as np
 from pcrp_core import InvalidCloud
 from pcrp_core.preprocess import check_geometry, farthest_point_sampling, merge_duplicates, spread
+from pcrp_core.visibility import sphere_directions
 import pytest
 from scipy.spatial.distance import cdist
 
@@ -57,18 +58,11 @@ def test_a_normally_spaced_cloud_is_not_thinned():
     assert len(merge_duplicates(points)) >= 2990
 
 
-def _sphere(n):
-    """N points evenly over the unit sphere (a Fibonacci lattice), as a sensor grid spaces them."""
-    z = 1 - (2 * np.arange(n) + 1) / n
-    a = np.pi * (3 - np.sqrt(5)) * np.arange(n)
-    return np.c_[np.sqrt(1 - z ** 2) * np.cos(a), np.sqrt(1 - z ** 2) * np.sin(a), z]
-
-
 def test_clumps_that_outlast_merging_are_spread_over_not_filled():
     # 300 surface points each repeated with jitter wider than merging's distance: sampling
     # took a point a clump and filled the clumps with the other 724
     rng = np.random.default_rng(3)
-    surface = _sphere(300)
+    surface = sphere_directions(300)   # evenly spaced, as a sensor grid
     clumped = surface[rng.integers(0, 300, 3000)] + rng.normal(scale=0.005, size=(3000, 3))
     clumped = merge_duplicates(clumped)
     assert len(clumped) > 1500
@@ -80,7 +74,8 @@ def test_clumps_that_outlast_merging_are_spread_over_not_filled():
 @pytest.mark.parametrize('cloud', ['surface', 'curve'])
 def test_spread_of_an_unclumped_cloud_is_farthest_point_sampling(cloud):
     t = np.linspace(0, 6 * np.pi, 3000)
-    points = _sphere(3000) if cloud == 'surface' else np.c_[np.cos(t), np.sin(t), 0.1 * t]
+    curve = np.c_[np.cos(t), np.sin(t), 0.1 * t]
+    points = sphere_directions(3000) if cloud == 'surface' else curve
     np.testing.assert_array_equal(
         spread(points, 1024), points[np.sort(farthest_point_sampling(points, 1024))]
     )
