@@ -280,6 +280,12 @@ def register_eval(sub) -> None:
         help="a box or cylinder hides 20-60 %% of each object's pixels",
     )
     p.add_argument(
+        '--scene',
+        action='store_true',
+        help='with --occlusion: give the model what the camera measured of the occluder too, as '
+        'the node does with scene_topics',
+    )
+    p.add_argument(
         '--up',
         action='store_true',
         help="tell the model which way is up (the table's normal); needs --kind table and a model "
@@ -354,10 +360,12 @@ def _eval(args) -> int:
         )
     except RuntimeError as e:
         return _fail(str(e))
-    rows = evaluate(model, scenes, meshes, use_up=args.up, progress=_progress)
+    rows = evaluate(model, scenes, meshes, use_up=args.up, progress=_progress,
+                    use_scene=args.scene)
     summary = summarise(rows)
     print(
-        f"{len(rows)} {args.kind}{' occluded' if args.occlusion else ''} views of "
+        f"{len(rows)} {args.kind}{' occluded' if args.occlusion else ''}"
+        f"{', occluder seen' if args.occlusion and args.scene else ''} views of "
         f'{len(meshes)} meshes, seed '
         f"{args.seed}{', up given' if args.up else ''}; model {args.model}"
     )

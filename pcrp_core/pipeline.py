@@ -351,6 +351,24 @@ class PCRP:
         return (self.templates is not None and viewpoint is not None and opts.method != 'pcrp'
                 and opts.scale_mode == 'metric')
 
+    def scene_in_reach(self, points, scene, viewpoint) -> np.ndarray | None:
+        """
+        Return the part of scene (M, 3) that estimate(points, viewpoint, scene=...) can use.
+
+        None when it uses none (the cloud is not answered view by view). A caller that queues or
+        ships clouds (the node) keeps this instead of a whole depth cloud.
+        """
+        if not self.uses_views(viewpoint):
+            return None
+        from pcrp_core.instance.occlusion import in_reach
+
+        vp = np.asarray(viewpoint, dtype=np.float64)
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        pts = pts[np.isfinite(pts).all(axis=1)] - vp
+        if not len(pts) or pts[:, 2].min() <= 0:
+            return None
+        return in_reach(np.asarray(scene) - vp, pts, float(self.templates.diameter.max())) + vp
+
     def warm(self) -> 'PCRP':
         """
         Make now what the first clouds would otherwise wait for, in a gallery of camera templates.
@@ -372,7 +390,7 @@ class PCRP:
             self._matcher = InstanceMatcher(self.templates)
         return self._matcher
 
-    def estimate(self, points, viewpoint=None, up=None) -> PoseResult:
+    def estimate(self, points, viewpoint=None, up=None, scene=None) -> PoseResult:
         """
         Which gallery object the cloud is, and its pose.
 
@@ -381,7 +399,10 @@ class PCRP:
         viewpoint: the sensor's position in the cloud's frame when the cloud is what one sensor saw
         (np.zeros(3) for a cloud in the camera's own frame); None for complete objects. up: which
         way is up in the cloud's frame (against gravity), when the caller knows it; answers then
-        keep the gallery's up axis (`up_axis`) on it. None: any orientation.
+        keep the gallery's up axis (`up_axis`) on it. None: any orientation. scene: (M, 3) the rest
+        of what the sensor measured, in the cloud's frame (its whole depth cloud will do: NaNs, the
+        object's own points and the background are fine), so that surface something in front of
+        the object hid is not taken for missing; used when the cloud is answered view by view.
         """
         from pcrp_core.category import answer as category
         from pcrp_core.instance import answer as views
@@ -395,6 +416,7 @@ class PCRP:
         timings = {'preprocess': time.perf_counter() - t0}
         if self.uses_views(viewpoint, opts):
             return views.answer(
-                self, pts, np.asarray(viewpoint, dtype=np.float64), up_pair, opts, timings, t0
+                self, pts, np.asarray(viewpoint, dtype=np.float64), up_pair, opts, timings, t0,
+                scene,
             )
         return category.answer(self, pts, viewpoint, up_pair, opts, pose_opts, timings, t0)

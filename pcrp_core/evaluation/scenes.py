@@ -65,6 +65,8 @@ class Scene:
     seed: int
     view: int = 0
     object_index: int = 0
+    # the occluder's pixels as measured (range noise), float32; None when nothing hides the object
+    occluder: np.ndarray | None = None
 
     @property
     def occluded(self) -> bool:
@@ -200,7 +202,7 @@ def sample_scene(mesh: Mesh, object_id: str, object_index: int, view: int, kind:
         n_all = int(mask.sum())
         if n_all < needed:
             continue
-        share = 0.0
+        share, occluder = 0.0, None
         if occlusion:
             for _ in range(OCCLUDER_TRIES):
                 occ = _occluder(occ_rng, depth, mask, camera, diameter)
@@ -208,6 +210,7 @@ def sample_scene(mesh: Mesh, object_id: str, object_index: int, view: int, kind:
                 seen = o2 == 0
                 share = 1.0 - seen.sum() / n_all
                 if OCCLUDED_SHARE[0] <= share <= OCCLUDED_SHARE[1] and seen.sum() >= min_pixels:
+                    occluder = depth_points(d2, camera, o2 == 1)
                     depth, mask = d2, seen
                     break
             else:
@@ -215,6 +218,9 @@ def sample_scene(mesh: Mesh, object_id: str, object_index: int, view: int, kind:
         points = depth_points(depth, camera, mask)
         if noise is not None:
             points = noise.apply(points, noise_rng)
+            # after the object's, so its points are drawn as they were before occluders were kept
+            if occluder is not None:
+                occluder = noise.apply(occluder, noise_rng)
         return Scene(
             object_id,
             R,
@@ -227,6 +233,7 @@ def sample_scene(mesh: Mesh, object_id: str, object_index: int, view: int, kind:
             int(seed),
             int(view),
             int(object_index),
+            None if occluder is None else occluder.astype(np.float32),
         )
     raise RuntimeError(
         f'{object_id}: no {kind} view with {min_pixels} pixels in {POSE_TRIES} tries '

@@ -32,6 +32,7 @@ def answer(
     opts: QueryOptions,
     timings: dict,
     t0: float,
+    scene=None,
 ) -> PoseResult:
     """
     Return the PoseResult of a cleaned cloud pts seen from viewpoint (see PCRP.estimate).
@@ -41,7 +42,8 @@ def answer(
     rng = np.random.default_rng(opts.seed)
     up, up_object = (None, None) if up_pair is None else up_pair
     match = model.matcher.match(
-        pts - viewpoint, model.instance_options, up, up_object, rng, timings
+        pts - viewpoint, model.instance_options, up, up_object, rng, timings,
+        scene=None if scene is None else np.asarray(scene, dtype=np.float64) - viewpoint,
     )
     best = match.best
     if model.view_calibration is not None:

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from pcrp_core.instance import hypotheses, local_shape
+from pcrp_core.instance.occlusion import occluders
 from pcrp_core.instance.shape_index import ShapeIndex
 from pcrp_core.instance.templates import extent, shape_code, Templates
 from pcrp_core.instance.verification import Fit, judge, query_surface, Surface, visible_points
@@ -210,7 +211,7 @@ class InstanceMatcher:
         return best
 
     def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,
-              exclude=()) -> Match:
+              exclude=(), scene=None) -> Match:
         """
         Match a cloud against the gallery: which object it shows, in which pose, and what it beat.
 
@@ -219,6 +220,8 @@ class InstanceMatcher:
         up: the up direction in that frame when known, with up_object the objects' up axis.
         exclude: gallery indices not to consider (how a calibration asks what the answer would
         be if the object were not in the gallery).
+        scene: (M, 3) what else the camera measured, in the same frame: surface an answer expects
+        behind it is not counted missing (occlusion.py).
         """
         import open3d as o3d
 
@@ -226,6 +229,8 @@ class InstanceMatcher:
         rng = np.random.default_rng(0) if rng is None else rng
         clock = Clock(timings)
         query, noise = query_surface(points)
+        if scene is not None:
+            query.occluders = occluders(scene, points, query.spacing, float(tpl.diameter.max()))
         tau = max(opts.fit_tolerance, opts.noise_tolerance * noise)
         view = hypotheses.QueryView(points)
         sample = points[

@@ -29,6 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from pcrp_core.instance.occlusion import hidden, Occluders
 from scipy.spatial import cKDTree
 
 
@@ -40,6 +41,8 @@ class Surface:
     normals: np.ndarray
     tree: cKDTree
     spacing: float
+    # a query cloud given the rest of its scene: what the camera saw in front of it (occlusion.py)
+    occluders: Occluders | None = None
 
 
 def local_planes(points: np.ndarray, tree: cKDTree, k: int = 10) -> tuple[np.ndarray, np.ndarray]:
@@ -117,13 +120,18 @@ def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray,
     """
     Return the Fit of the object (surface, in its own frame) at pose (R, t) to the query.
 
-    expected: indices of the surface points the camera would see. unshown_weight: how much an
+    expected: indices of the surface points the camera would see (less those the query's
+    occluders hide). unshown_weight: how much an
     expected point missing from the cloud costs against a cloud point off the object (less than 1:
     the segmenter may have cut away what something in front of the object hid).
     """
     to_object = distances((query.points - t) @ R, surface)
+    shown = surface.points[expected] @ R.T + t
+    if query.occluders is not None and len(expected):
+        keep = ~hidden(shown, query.occluders, tau)
+        expected, shown = expected[keep], shown[keep]
     if len(expected):
-        to_query = distances(surface.points[expected] @ R.T + t, query)
+        to_query = distances(shown, query)
     else:
         to_query = np.full(1, np.inf)
     unexplained = float(np.mean(np.minimum(to_object, tau) ** 2)) / tau ** 2

@@ -1,0 +1,131 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+What the camera saw in front of an object: surface hidden behind it is not missing.
+
+A partly hidden object's cloud lacks the surface behind whatever hid it, and the verifier
+(verification.py) counts expected surface the cloud lacks against the pose: a right pose then
+pays for the occluder. Given the rest of what the camera measured (the scene: its whole depth
+cloud, or whatever of it lies in front of the object), an expected point is hidden when the
+scene holds a point on nearly the same ray more than tau nearer the camera that is not the
+object's own cloud. The camera could not have seen the point, so its absence says nothing: the
+visibility test BOP's VSD makes with the depth image. Points of the object's own cloud never
+hide: a pose that puts the object behind its own measured surface is wrong, and the cloud's
+points it leaves unexplained say so.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import minimum_filter
+
+
+MAX_CELLS = 1024
+
+
+@dataclass
+class Occluders:
+    """
+    The nearest depth the scene measured on each cell of rays around an object: a depth image.
+
+    Cells are squares in ray coordinates (x / z, y / z) about as wide as the object's cloud's
+    point spacing; inf where nothing can hide the object (nothing measured in front, or the object
+    itself was seen there).
+    """
+
+    near: np.ndarray      # (nx, ny) metres
+    origin: np.ndarray    # (2,) ray coordinates of cell [0, 0]'s corner
+    cell: float           # a cell's side in ray coordinates
+
+
+def _rays(points: np.ndarray) -> np.ndarray:
+    return points[:, :2] / points[:, 2:3]
+
+
+def in_reach(scene: np.ndarray, cloud: np.ndarray, reach: float) -> np.ndarray:
+    """
+    Return the scene's points that can hide part of an object the cloud shows, as (K, 3) floats.
+
+    Camera at the origin. Those in front of the camera, nearer than the cloud's farthest point plus
+    reach, on rays within reach of the cloud's (at its nearest depth): an answer's surface lies at
+    most reach (the largest object's diameter) beyond its cloud. NaN holes drop out.
+    """
+    scene = np.asarray(scene).reshape(-1, 3)
+    z = scene[:, 2]
+    with np.errstate(invalid='ignore'):
+        scene = scene[(z > 1e-6) & (z < float(cloud[:, 2].max()) + reach)]
+        rays, own = _rays(scene), _rays(cloud)
+        widen = reach / max(float(cloud[:, 2].min()), 1e-6)
+        window = (rays >= own.min(axis=0) - widen) & (rays <= own.max(axis=0) + widen)
+    return scene[window.all(axis=1)].astype(np.float64)
+
+
+def _cells(rays: np.ndarray, origin: np.ndarray, cell: float) -> np.ndarray:
+    return np.floor((rays - origin) / cell).astype(np.int64)
+
+
+def occluders(scene: np.ndarray, cloud: np.ndarray, spacing: float,
+              reach: float) -> Occluders | None:
+    """
+    Return what of the scene can hide the object the cloud shows, or None when nothing can.
+
+    scene: (M, 3) what the camera measured, in the cloud's frame with the camera at the origin (it
+    may hold the cloud's own points, NaNs and everything behind). spacing: the cloud's point
+    spacing. reach: as in_reach.
+    """
+    if float(cloud[:, 2].min()) <= 1e-6:   # not a view from this camera: no rays to follow
+        return None
+    scene = in_reach(scene, cloud, reach)
+    if not len(scene):
+        return None
+    own = _rays(cloud)
+    widen = reach / float(cloud[:, 2].min())
+    origin = own.min(axis=0) - widen
+    span = float((own.max(axis=0) + widen - origin).max())
+    # at most MAX_CELLS a side, whatever a clumped cloud's spacing
+    cell = max(spacing / float(np.median(cloud[:, 2])), span / MAX_CELLS)
+    shape = _cells(own.max(axis=0) + widen, origin, cell) + 1
+    grid = np.full(tuple(shape), np.inf)
+    ij = np.clip(_cells(_rays(scene), origin, cell), 0, shape - 1)
+    np.minimum.at(grid, (ij[:, 0], ij[:, 1]), scene[:, 2])
+    # a scene sparser than the cloud (or thinned) leaves cells empty between its points
+    grid = minimum_filter(grid, size=3, mode='nearest')
+    # where the object itself was seen nothing hid it (its cells and their neighbours: a cloud
+    # thinned to its spacing leaves some of its own cells empty)
+    i, j = _cells(own, origin, cell).T
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            grid[np.clip(i + di, 0, shape[0] - 1), np.clip(j + dj, 0, shape[1] - 1)] = np.inf
+    if not np.isfinite(grid).any():
+        return None
+    return Occluders(grid, origin, cell)
+
+
+def hidden(points: np.ndarray, occ: Occluders, tau: float) -> np.ndarray:
+    """
+    Return (N,) bool: which points (camera frame) lie more than tau behind an occluder.
+
+    A point not in front of the camera is not hidden (a hypothesis far off, as an identity pose
+    placing an object at the camera, can put some there), nor one on rays the scene was not kept
+    for.
+    """
+    out = np.zeros(len(points), dtype=bool)
+    ahead = np.flatnonzero(points[:, 2] > 1e-6)
+    ij = _cells(_rays(points[ahead]), occ.origin, occ.cell)
+    inside = ((ij >= 0) & (ij < occ.near.shape)).all(axis=1)
+    ahead, ij = ahead[inside], ij[inside]
+    out[ahead] = occ.near[ij[:, 0], ij[:, 1]] < points[ahead, 2] - tau
+    return out
