@@ -19,12 +19,18 @@ Fixed before any view was answered, and never changed since; tools/robot_report.
 tools/robot_writer.py describes it.
 """
 
-SCENARIOS = {   # name: (kind, occluded, up known to the method)
-    'free': ('free', False, False),
-    'table': ('table', False, True),
-    'free_occluded': ('free', True, False),
-    'table_occluded': ('table', True, True),
+SCENARIOS = {   # name: (kind, occluded, up known to the method, occluder given as the scene)
+    'free': ('free', False, False, False),
+    'table': ('table', False, True, False),
+    'free_occluded': ('free', True, False, False),
+    'table_occluded': ('table', True, True, False),
+    # the occluded views again, the camera's measure of the occluder given (the node's
+    # scene_topics); added 2026-12-05, the views themselves unchanged
+    'free_occluded_seen': ('free', True, False, True),
+    'table_occluded_seen': ('table', True, True, True),
 }
+# the scenarios "all" pools: each view once
+BASE_SCENARIOS = ('free', 'table', 'free_occluded', 'table_occluded')
 SEEDS = {'test': 0, 'validation': 1000}
 METHODS = {
     'pcrp': 'pcrp (README recipe, defaults)',

@@ -105,10 +105,13 @@ def test_the_occluder_hides_the_share_the_scene_reports():
         assert OCCLUDED_SHARE[0] <= scene.occluded_share <= OCCLUDED_SHARE[1]
         assert 1.0 - len(scene.points) / alone == pytest.approx(scene.occluded_share, abs=1e-9)
         assert len(scene.points) >= 150 and scene.scenario == 'free_occluded'
+        # what the camera measured of the occluder: in front of the object, kept for the scene
+        assert len(scene.occluder) > 0 and scene.occluder[:, 2].max() < scene.points[:, 2].min()
         # the same view unoccluded is the same pose, all pixels seen
         plain = sample_scene(mesh, 'box', 0, view, 'free', occlusion=False, seed=3)
         np.testing.assert_array_equal(plain.R, scene.R)
         assert len(plain.points) == alone and plain.occluded_share == 0.0
+        assert plain.occluder is None
 
 
 def test_scenes_come_from_their_seeds_alone():
@@ -258,6 +261,10 @@ def test_pcrp_eval_prints_right_or_twin_and_confidence_figures(built, capsys):
                and r['timings']['total'] > 0 for r in result['records'])
     assert main(['eval', str(meshes), '--model', str(model), '--up']) == 2
     assert '--kind table' in capsys.readouterr().err
+    seen = _run('eval', str(meshes), '--model', str(model), '--views-per-object', '1',
+                '--occlusion', '--scene')
+    assert seen.returncode == 0, seen.stderr
+    assert '3 free occluded, occluder seen views of 3 meshes' in seen.stdout
 
 
 def test_meshes_in_millimetres_are_refused_until_scaled_and_eval_scales_them_alike(
@@ -307,10 +314,15 @@ def test_the_robot_report_quick_run_writes_its_files_and_holds_an_object_out(
         assert f'(robot_{figure}.png)' in text
         assert (out / f'robot_{figure}.png').stat().st_size > 10_000
     res = json.loads((out / 'robot.json').read_text())
-    scenarios = {'free', 'table', 'free_occluded', 'table_occluded'}
+    scenarios = {'free', 'table', 'free_occluded', 'table_occluded', 'free_occluded_seen',
+                 'table_occluded_seen'}
     assert set(res['results']) == set(res['unknown']) == scenarios
     assert all(len(rows) == 3 for per in res['results'].values() for rows in per.values())
     assert set(res['results']['free']) == {'pcrp', 'ransac', 'fgr', 'ransac_told', 'fgr_told'}
+    # the occluded views again with the occluder seen: the same views, pcrp alone
+    assert set(res['results']['free_occluded_seen']) == {'pcrp'}
+    assert ([r['object_id'] for r in res['results']['free_occluded_seen']['pcrp']]
+            == [r['object_id'] for r in res['results']['free_occluded']['pcrp']])
     (a, b, chamfer), = res['twins']['pairs']
     assert {a, b} == {'flat_box', 'flat_box_copy'} and chamfer < 0.0005
     # the model found the box and its copy one shape; the can is the one left to hold out
