@@ -29,6 +29,12 @@ The plain node runs configure and activate in its constructor. Clouds are checke
 workers are; usable ones wait in a short queue per topic (`queue_size`: a cloud arriving at a
 full queue pushes out its oldest, counted as dropped_stale, so a slow model never builds a
 backlog), and `workers` threads answer the topics in turn.
+
+With `scene_topics`, each cloud is answered with the camera's whole depth cloud of the same
+stamp and frame (pcrp_ros/scenes.py), cropped to what the estimate can use. The scene is looked
+up when the cloud is queued (the scene message is kept with it, unread) and, if none had come
+yet, again when a worker takes the cloud; it is read only then. A cloud whose scene is missing
+or unusable is answered without one: counted, and logged as rejections are.
 """
 
 from __future__ import annotations
@@ -37,6 +43,7 @@ import collections
 import sys
 import threading
 import time
+from typing import NamedTuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
@@ -47,6 +54,7 @@ from pcrp_ros.conversions import aligned_points, CloudFormatError, detections_ms
 from pcrp_ros.conversions import pointcloud2_to_xyz, pose_stamped, xyz_to_pointcloud2
 from pcrp_ros.engine import Engine, load_engine, LOAD_ERRORS, ReloadRequest
 from pcrp_ros.parameters import descriptor, MODEL_SETTINGS, NodeSettings, parameters, ros_value
+from pcrp_ros.scenes import scene_points, SceneBuffer
 from pcrp_ros.stats import StreamStats
 from pcrp_ros.workers import ProcessEstimator, WorkerDied
 from rcl_interfaces.msg import SetParametersResult
@@ -70,6 +78,15 @@ RELOAD_WAIT = 600.0
 GIL_SWITCH_INTERVAL_S = 0.0005
 
 
+class Waiting(NamedTuple):
+    """A checked cloud waiting to be answered."""
+
+    header: object
+    points: object                  # what PCRP.screen made of the cloud
+    received: float                 # time.monotonic() on arrival
+    scene: object = None            # the scene message found when it was queued, unread
+
+
 class CloudAnswerer:
     """The streams, the workers and the model of one node; see the module docstring."""
 
@@ -77,7 +94,9 @@ class CloudAnswerer:
         self.node = node
         for spec in parameters():
             node.declare_parameter(spec['name'], ros_value(spec['default']), descriptor(spec))
-        values = {spec['name']: self._param(spec['name']) for spec in parameters()}
+        # a `[]` in a params file leaves a list parameter declared without a type unset (None)
+        values = {spec['name']: _or_default(self._param(spec['name']), spec['default'])
+                  for spec in parameters()}
         # ValueError saying which is wrong, before anything is loaded
         self.settings = NodeSettings(**{k: values[k] for k in NodeSettings.__dataclass_fields__})
         self._params = {k: values[k] for k in MODEL_SETTINGS}
@@ -88,6 +107,9 @@ class CloudAnswerer:
         self._resolved = {}
         self._pubs = {}
         self._subs = []
+        self._scene_topic = self.settings.scene_topic_of()   # input topic -> its scene topic
+        self._scenes = SceneBuffer()
+        self._scene_subs = []
         self._diag = None
         self._timer = None
         self._service = None
@@ -153,6 +175,12 @@ class CloudAnswerer:
                 pass
             self._pubs[topic] = pubs
             self.stats.setdefault(topic, StreamStats())
+        for scene_topic in dict.fromkeys(s.scene_topics):   # each once, in order
+            self._scene_subs.append(self.node.create_subscription(
+                PointCloud2, scene_topic,
+                lambda msg, t=scene_topic: self._scenes.add(t, msg), qos,
+                callback_group=MutuallyExclusiveCallbackGroup()))
+            self._resolved[scene_topic] = self._scene_subs[-1].topic_name
         self._diag = self.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._timer = self.node.create_timer(1.0, self.publish_diagnostics)
         with self._cv:
@@ -165,7 +193,7 @@ class CloudAnswerer:
             t.start()
         self._log().info(f'{len(self.engine.model.gallery_ids)} gallery objects '
                          f"({', '.join(self.engine.model.categories)}), listening on "
-                         f"{', '.join(sub.topic_name for sub in self._subs)}")
+                         f"{', '.join(sub.topic_name for sub in self._subs)}{self._scenes_text()}")
 
     def deactivate(self) -> None:
         """
@@ -184,9 +212,10 @@ class CloudAnswerer:
             t.join(timeout=60.0)
         self._threads = []
         pubs, self._pubs = self._pubs, {}
-        for sub in self._subs:
+        for sub in self._subs + self._scene_subs:
             self.node.destroy_subscription(sub)
-        self._subs = []
+        self._subs, self._scene_subs = [], []
+        self._scenes.clear()
         for group in pubs.values():
             for pub in group.values():
                 self.node.destroy_publisher(pub)
@@ -351,12 +380,13 @@ class CloudAnswerer:
         except Exception as e:   # nothing one message holds may take the subscription down
             self.reject(topic, 'internal_error', f'{type(e).__name__}: {e}')
             return
+        item = Waiting(msg.header, points, received, self._queued_scene(topic, msg))
         with self._cv:
             waiting = self._slots.setdefault(topic, collections.deque())
             while len(waiting) >= self.settings.queue_size:
                 waiting.popleft()
                 stats.count('dropped_stale')
-            waiting.append((msg.header, points, received))
+            waiting.append(item)
             self._cv.notify()
 
     def _next(self, k: int, engine):
@@ -382,7 +412,7 @@ class CloudAnswerer:
                 # behind: every queue then holds only its newest clouds, and the topic published
                 # first in each round always holds the oldest of them.
                 topic = min(self._slots,
-                            key=lambda t: (self._served.get(t, -1.0), self._slots[t][0][2]))
+                            key=lambda t: (self._served.get(t, -1.0), self._slots[t][0].received))
                 waiting = self._slots[topic]
                 item = waiting.popleft()
                 if not waiting:
@@ -444,20 +474,23 @@ class CloudAnswerer:
         rclpy's own throttle is per call site, so one noisy reason would hide every other.
         """
         self.stats[topic].count('rejected', reason)
-        now = time.monotonic()
-        key = (topic, reason)
-        if now - self._last_log.get(key, -np.inf) >= float(self._param('log_throttle_sec')):
-            self._last_log[key] = now
+        if self._due((topic, reason)):
             total = self.stats[topic].rejections[reason]
             self._log().warning(f'{topic}: cloud rejected ({reason}, {total} so far): {message}')
 
-    def answer(self, topic: str, item: tuple, engine: Engine, k: int = 0) -> None:
+    def _due(self, key) -> bool:
+        """Tell whether a log line of this kind may be written now (then it is taken to be)."""
+        now = time.monotonic()
+        if now - self._last_log.get(key, -np.inf) < float(self._param('log_throttle_sec')):
+            return False
+        self._last_log[key] = now
+        return True
+
+    def answer(self, topic: str, item: Waiting, engine: Engine, k: int = 0) -> None:
         """Estimate one queued cloud with worker k of the engine and publish the answer."""
-        header, points, received = item
-        viewpoint = np.zeros(3) if self._param('sensor_at_origin') else None
+        header, received = item.header, item.received
         try:
-            result = engine.estimators[k].estimate(points, viewpoint, self._up,
-                                                   dict(self._params))
+            result = self._estimate(topic, item, engine, k)
         except InvalidCloud as e:
             self.reject(topic, e.reason, str(e))
             return
@@ -482,6 +515,87 @@ class CloudAnswerer:
         now = self.node.get_clock().now().nanoseconds * 1e-9
         stats.timing(time.monotonic() - received, now - stamp)
         stats.count('answered')
+
+    def _estimate(self, topic: str, item: Waiting, engine: Engine, k: int):
+        """
+        Return worker k's PoseResult of the cloud, with its scene when it has a usable one.
+
+        An estimate that fails with the scene (not for the cloud: InvalidCloud) is made again
+        without it, so no scene costs a cloud its answer.
+        """
+        viewpoint = np.zeros(3) if self._param('sensor_at_origin') else None
+        scene, outcome = self._scene_for(topic, item, engine.model, viewpoint)
+        estimate = engine.estimators[k].estimate
+        try:
+            if scene is not None:
+                try:
+                    return estimate(item.points, viewpoint, self._up, dict(self._params), scene)
+                except (InvalidCloud, WorkerDied):   # the cloud's or the worker's fault
+                    raise
+                except Exception as e:   # the scene's or the core's: the cloud is still answered
+                    outcome = self._without_scene(
+                        topic, 'rejected_internal_error',
+                        f'the estimate failed with it ({type(e).__name__}: {e})')
+            return estimate(item.points, viewpoint, self._up, dict(self._params))
+        finally:
+            if outcome is not None:
+                self.stats[topic].scene(outcome)
+
+    # -- scenes -------------------------------------------------------------------------------
+    def _queued_scene(self, topic: str, msg: PointCloud2):
+        """Return the scene message of an arriving cloud, if it has come (kept, unread)."""
+        scene_topic = self._scene_topic.get(topic)
+        return None if scene_topic is None else self._scenes.find(scene_topic, msg.header)
+
+    def _scene_message(self, topic: str, item: Waiting):
+        """Return the cloud's scene message: the one found on arrival, else one come since."""
+        if item.scene is not None and item.scene.header.frame_id == item.header.frame_id:
+            return item.scene
+        return self._scenes.find(self._scene_topic[topic], item.header) or item.scene
+
+    def _scene_for(self, topic: str, item: Waiting, model, viewpoint):
+        """
+        Return (scene, outcome): what of the cloud's scene the estimate can use, and its count.
+
+        outcome is None when the topic has no scene topic, else what StreamStats.scene counts:
+        used, unused (the model would use none), missing, or rejected_<reason>. Nothing a scene
+        message holds is raised.
+        """
+        if topic not in self._scene_topic:
+            return None, None
+        if not model.uses_views(viewpoint):
+            return None, 'unused'   # not read at all: the estimate would ignore it
+        msg = self._scene_message(topic, item)
+        if msg is None:
+            return None, self._without_scene(
+                topic, 'missing', f'none of the last {self._scenes.size} is stamped as the '
+                'cloud (a segmenter must stamp each cloud as the depth cloud it cut it from)')
+        try:
+            scene = model.scene_in_reach(item.points, scene_points(msg, item.header.frame_id),
+                                         viewpoint)
+        except CloudFormatError as e:
+            return None, self._without_scene(topic, f'rejected_{e.reason}', str(e))
+        except Exception as e:   # nothing one message holds may cost the cloud its answer
+            return None, self._without_scene(topic, 'rejected_internal_error',
+                                             f'{type(e).__name__}: {e}')
+        if scene is None:
+            return None, 'unused'
+        # depth clouds are float32: halves what reaches a worker process, and loses nothing
+        return scene.astype(np.float32), 'used'
+
+    def _without_scene(self, topic: str, outcome: str, why: str) -> str:
+        """Log why a cloud goes without its scene, once per kind per log_throttle_sec."""
+        if self._due((topic, 'scene', outcome)):
+            total = self.stats[topic].scenes[outcome] + 1   # counted once it is estimated
+            scene_topic = self._scene_topic[topic]
+            self._log().warning(f'{topic}: cloud answered without a scene ({outcome}, {total} so '
+                                f'far): {self._resolved.get(scene_topic, scene_topic)}: {why}')
+        return outcome
+
+    def _scenes_text(self) -> str:
+        if not self._scene_subs:
+            return ''
+        return f" with scenes from {', '.join(sub.topic_name for sub in self._scene_subs)}"
 
     # -- diagnostics --------------------------------------------------------------------------
     def _workers_text(self) -> str:
@@ -514,11 +628,15 @@ class CloudAnswerer:
                 values=[KeyValue(key=k, value=str(v)) for k, v in values.items()]))
         for topic, stats in self.stats.items():
             ok, text = stats.status()
+            values = stats.snapshot()
+            if topic in self._scene_topic:
+                scene_topic = self._scene_topic[topic]
+                values['scene_topic'] = self._resolved.get(scene_topic, scene_topic)
             arr.status.append(DiagnosticStatus(
                 level=DiagnosticStatus.OK if ok else DiagnosticStatus.WARN,
                 name=f'{fqn}: {self._resolved.get(topic, topic)}', hardware_id='pcrp',
                 message=text, values=[KeyValue(key=k, value=_text(k, v))
-                                      for k, v in sorted(stats.snapshot().items())]))
+                                      for k, v in sorted(values.items())]))
         return arr
 
     def publish_diagnostics(self) -> None:
@@ -534,6 +652,10 @@ def _text(key: str, value) -> str:
     if isinstance(value, float):
         return f'{value:.3f}' if key.startswith('confidence') else f'{value:.1f}'
     return str(value)
+
+
+def _or_default(value, default):
+    return ros_value(default) if value is None else value
 
 
 def _checked_up(value, model):

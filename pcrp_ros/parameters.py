@@ -41,6 +41,12 @@ class NodeSettings(Options):
     input_topics: tuple = setting(
         ('segmented_object',), 'PointCloud2 topics of segmented objects, one object per '
         'message.', read_only=True)
+    scene_topics: tuple = setting(
+        (), "PointCloud2 topics of the camera's whole depth cloud (e.g. /camera/depth/points): "
+        'one shared by every input topic, or one per entry of input_topics, in order; empty: '
+        'none. Each cloud is answered with the depth cloud of its own stamp and frame, so surface '
+        'of the object that something in front of it hid is not counted missing.',
+        read_only=True)
     publish_aligned_model: bool = setting(
         True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.")
     sensor_at_origin: bool = setting(
@@ -64,6 +70,22 @@ class NodeSettings(Options):
         1, 'Clouds answered at once. 1: in a thread of the node; more: that many worker '
         'processes, each with its own copy of the model (about one per core).',
         low=1, high=64, read_only=True)
+
+    def __post_init__(self):
+        super().__post_init__()
+        inputs, scenes = len(self.input_topics), len(self.scene_topics)
+        if scenes not in (0, 1, inputs):
+            raise ValueError(
+                f'scene_topics: expected one topic shared by every input topic or one per input '
+                f'topic ({inputs}, in the order of input_topics), got {scenes}: '
+                f'{list(self.scene_topics)}')
+
+    def scene_topic_of(self) -> dict:
+        """Map each input topic to the scene topic its clouds are answered with (if any)."""
+        scenes = self.scene_topics
+        if len(scenes) == 1:   # one camera's depth cloud, shared by every input topic
+            scenes *= len(self.input_topics)
+        return dict(zip(self.input_topics, scenes))
 
 
 MODEL_SETTINGS = tuple(d['name'] for d in user_settings())
@@ -91,6 +113,11 @@ def descriptor(spec: dict):
     d = ParameterDescriptor(
         name=spec['name'], description=text, read_only=bool(spec.get('read_only'))
     )
+    if spec['default'] == ():
+        # rclpy types an empty list default as a byte array, and a `[]` in a params file or on
+        # the command line sets nothing, so a statically typed empty list of strings would refuse
+        # every list of topics given: NodeSettings checks the type instead
+        d.dynamic_typing = True
     default, low, high = spec['default'], spec.get('low'), spec.get('high')
     if low is None and high is None or isinstance(default, (bool, str, tuple)):
         return d

@@ -33,6 +33,7 @@ class StreamStats:
         self._window = window
         self.counts = Counter()             # received, answered, rejected, dropped_stale
         self.rejections = Counter()         # by reason
+        self.scenes = Counter()             # what estimates had of a scene: used, missing, ...
         self.latency = deque(maxlen=window)  # seconds from receipt to publication
         self.age = deque(maxlen=window)      # seconds from the cloud's stamp to publication
         self.confidence = deque(maxlen=window)  # of the answers published
@@ -48,6 +49,11 @@ class StreamStats:
                 self.streak += 1
             elif key == 'answered':
                 self.streak = 0
+
+    def scene(self, outcome: str) -> None:
+        """Count what one estimate had of its scene; reported as scene_<outcome>."""
+        with self._lock:
+            self.scenes[outcome] += 1
 
     def timing(self, latency: float, age: float) -> None:
         with self._lock:
@@ -66,6 +72,7 @@ class StreamStats:
         with self._lock:
             out = dict(self.counts)
             out.update({f'rejected_{k}': v for k, v in self.rejections.items()})
+            out.update({f'scene_{k}': v for k, v in self.scenes.items()})
             windows = [('latency', self.latency), ('age', self.age)]
             windows += [(f'stage_{k}', v) for k, v in sorted(self.stages.items())]
             for name, values in windows:

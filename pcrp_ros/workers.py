@@ -56,9 +56,9 @@ class LocalEstimator:
     def __init__(self, model):
         self.model = model
 
-    def estimate(self, points, viewpoint, up, params):
+    def estimate(self, points, viewpoint, up, params, scene=None):
         # the node sets its model's parameters itself when they change; params is for workers
-        return self.model.estimate(points, viewpoint=viewpoint, up=up)
+        return self.model.estimate(points, viewpoint=viewpoint, up=up, scene=scene)
 
     def close(self):
         pass
@@ -85,12 +85,12 @@ def _worker_main(conn, model_path, params):
             return
         if task is None:
             return
-        points, viewpoint, up, params = task
+        points, viewpoint, up, params, scene = task
         try:
             if params != current:
                 model.set_params(**params)
                 current = dict(params)
-            conn.send(('ok', model.estimate(points, viewpoint=viewpoint, up=up)))
+            conn.send(('ok', model.estimate(points, viewpoint=viewpoint, up=up, scene=scene)))
         except InvalidCloud as e:
             conn.send(('invalid', e.reason, str(e)))
         except Exception as e:  # one cloud must not end the worker
@@ -149,10 +149,14 @@ class ProcessEstimator:
             raise WorkerDied(f'worker process {self._proc.pid} ended '
                              f'(exit code {self._proc.exitcode})') from None
 
-    def estimate(self, points, viewpoint, up, params):
-        """Return the worker's PoseResult; raise InvalidCloud as the model did, or WorkerDied."""
+    def estimate(self, points, viewpoint, up, params, scene=None):
+        """
+        Return the worker's PoseResult; raise InvalidCloud as the model did, or WorkerDied.
+
+        scene: what of the depth cloud the estimate can use (PCRP.scene_in_reach), not all of it.
+        """
         try:
-            self._conn.send((points, viewpoint, up, params))
+            self._conn.send((points, viewpoint, up, params, scene))
         except (BrokenPipeError, OSError):
             raise WorkerDied(f'worker process {self._proc.pid} ended '
                              f'(exit code {self._proc.exitcode})') from None

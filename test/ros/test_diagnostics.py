@@ -23,6 +23,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 import numpy as np
 from pcrp_core import PCRP
 from pcrp_core.result import PoseResult
+from pcrp_ros.answering import Waiting
 from pcrp_ros.conversions import detections_msg, xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode
 from pcrp_ros.stats import StreamStats, WARN_STREAK
@@ -169,7 +170,7 @@ def test_a_rejected_answer_publishes_nothing_but_its_timings_count(model, monkey
             answerer = node.answerer
             recorders = {k: Recorder() for k in answerer._pubs['segmented_object']}
             monkeypatch.setitem(answerer._pubs, 'segmented_object', recorders)
-            answerer.answer('segmented_object', (Header(), np.zeros((40, 3)), 0.0),
+            answerer.answer('segmented_object', Waiting(Header(), np.zeros((40, 3)), 0.0),
                             answerer.engine)
             assert all(not r.sent for r in recorders.values())
             snap = node.stats['segmented_object'].snapshot()

@@ -21,6 +21,7 @@ from geometry_msgs.msg import PoseStamped
 from helpers import PROCEDURAL_MODEL, random_pose, rotation_error_deg
 import numpy as np
 from pcrp_core import InvalidCloud, PCRP
+from pcrp_ros.answering import Waiting
 from pcrp_ros.conversions import xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode
 import pytest
@@ -183,7 +184,7 @@ def test_up_vector_is_validated_and_reaches_the_core(model, monkeypatch):
         monkeypatch.setattr(model, 'estimate', estimate)
         monkeypatch.setattr(model, 'pose_options', model.pose_options)  # restored after
         node.answerer.answer(
-            'segmented_object', (Header(), np.zeros((40, 3)), 0.0), node.answerer.engine
+            'segmented_object', Waiting(Header(), np.zeros((40, 3)), 0.0), node.answerer.engine
         )
         np.testing.assert_allclose(seen[0]['up'], [0.0, -1.0, 0.0])
         assert node.set_parameters([Parameter('up_tolerance_deg', value=30.0)])[0].successful

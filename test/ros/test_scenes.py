@@ -1,0 +1,299 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+scene_topics: clouds answered with the depth cloud of their stamp and frame, over real DDS.
+
+A partly hidden household object (the shipped model's cone, a quarter of it behind an occluder)
+is published with the camera's whole depth cloud, organized and with NaN holes. Its answer is
+surer with the scene than without; every scene that cannot be used leaves the cloud answered.
+"""
+
+from builtin_interfaces.msg import Time
+import numpy as np
+from pcrp_core import PCRP
+from pcrp_ros.conversions import pointcloud2_to_xyz, xyz_to_pointcloud2
+from pcrp_ros.node import PcrpNode
+from pcrp_ros.parameters import NodeSettings
+from pcrp_ros.workers import ProcessEstimator
+import pytest
+import rclpy
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+# sets ROS_DOMAIN_ID and the discovery range before any context is made
+from rosutil import ros_context, spinning, wait_for
+from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import Header
+
+OBJECT, DEPTH = 'scene_test/object', 'scene_test/depth'
+FRAME = 'camera_depth_optical_frame'
+# reliable both ways: every message of a case arrives, so each count below is exact
+RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+
+
+@pytest.fixture(scope='module')
+def model():
+    return PCRP.load(None)
+
+
+@pytest.fixture(scope='module')
+def view():
+    """Show the shipped gallery's cone to a camera, about a quarter hidden by an occluder."""
+    from pcrp_core.evaluation.scenes import sample_scene
+    from pcrp_core.sources import load_source
+
+    cone = next(o for o in load_source('household', split='train') if o.gallery_id == 'cone')
+    scene = sample_scene(cone.mesh, 'cone', 14, 1, 'free', occlusion=True, seed=1)
+    assert scene.occluder is not None
+    return scene
+
+
+def _header(sec, frame=FRAME):
+    return Header(stamp=Time(sec=sec, nanosec=500), frame_id=frame)
+
+
+def _depth_cloud(view, header, width=64):
+    """Make the whole depth cloud as a driver publishes it: organized, NaN holes, a wall behind."""
+    far = float(view.points[:, 2].max()) + 0.3
+    u, v = np.meshgrid(np.linspace(-1.2, 1.2, 60), np.linspace(-0.9, 0.9, 45))
+    wall = np.stack([u.ravel() * far, v.ravel() * far, np.full(u.size, far)], axis=1)
+    points = np.concatenate([view.points, view.occluder, wall]).astype(np.float32)
+    points[::7] = np.nan                                     # pixels without a depth
+    height = -(-len(points) // width)
+    holes = np.full((height * width - len(points), 3), np.nan, dtype=np.float32)
+    msg = xyz_to_pointcloud2(np.concatenate([points, holes]), header)
+    msg.height, msg.width, msg.row_step = height, width, width * msg.point_step
+    return msg
+
+
+class Stream:
+    """The node's object and scene topics, and what its model was asked to estimate."""
+
+    def __init__(self, node, client, model):
+        self.node, self.stats = node, node.stats[OBJECT]
+        self.objects = client.create_publisher(PointCloud2, f'/{OBJECT}', RELIABLE)
+        self.scenes = client.create_publisher(PointCloud2, f'/{DEPTH}', RELIABLE)
+        self.calls = []   # (scene given, PoseResult)
+        self.fail_with_scene = False
+        estimate = model.estimate
+
+        def recorded(points, **kwargs):
+            if self.fail_with_scene and kwargs.get('scene') is not None:
+                raise RuntimeError('a core that trips over this scene')
+            result = estimate(points, **kwargs)
+            self.calls.append((kwargs.get('scene'), result))
+            return result
+        model.estimate = recorded
+
+    def ready(self):
+        return wait_for(lambda: self.objects.get_subscription_count()
+                        and self.scenes.get_subscription_count(), 10)
+
+    def send(self, cloud, sec, scene=None, frame=FRAME):
+        """Publish the scene (if any), then the cloud once the node holds it; await the answer."""
+        if scene is not None:
+            self.scenes.publish(scene)
+            buffered = self.node.answerer._scenes
+            assert wait_for(lambda: buffered.find(DEPTH, scene.header) is not None, 10)
+        before = self.stats.counts['answered']
+        self.objects.publish(xyz_to_pointcloud2(cloud, _header(sec, frame)))
+        assert wait_for(lambda: self.stats.counts['answered'] > before, 60), \
+            (dict(self.stats.counts), dict(self.stats.rejections))
+        return self.calls[-1]
+
+    def scene_counts(self):
+        return {k: v for k, v in self.stats.snapshot().items() if k.startswith('scene_')}
+
+
+@pytest.fixture(scope='module')
+def stream(model):
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=[
+            Parameter('input_topics', value=[OBJECT]), Parameter('scene_topics', value=[DEPTH]),
+            Parameter('qos_reliability', value='reliable'), Parameter('qos_depth', value=10),
+            # every estimate published, however unsure: the counts below are of answers
+            Parameter('min_confidence', value=0.0)])
+        client = rclpy.create_node('scene_client', context=ctx)
+        s = Stream(node, client, model)
+        with spinning(ctx, node, client):
+            assert s.ready()
+            yield s
+        del model.estimate   # the recording wrapper
+
+
+def test_a_cloud_is_answered_with_the_scene_of_its_stamp_and_frame(stream, model, view):
+    alone, _ = stream.send(view.points, 1)
+    assert alone is None and stream.scene_counts() == {'scene_missing': 1}
+    without = stream.calls[-1][1]
+
+    depth = _depth_cloud(view, _header(2))
+    given, answer = stream.send(view.points, 2, depth)
+    assert stream.scene_counts() == {'scene_missing': 1, 'scene_used': 1}
+    # the part of the depth cloud in reach of the object, as the core crops it
+    screened = model.screen(view.points.astype(np.float64))
+    expected = model.scene_in_reach(screened, pointcloud2_to_xyz(depth), np.zeros(3))
+    np.testing.assert_allclose(given, expected, atol=1e-6)
+    assert len(view.occluder) < len(given) < len(pointcloud2_to_xyz(depth))   # the wall cropped
+    # what the occluder hid is no longer counted missing
+    assert answer.gallery_id == without.gallery_id == 'cone'
+    assert answer.confidence > without.confidence + 0.2, (answer.confidence, without.confidence)
+    statuses = {s.name: s for s in stream.node.answerer.diagnostics().status}
+    values = {kv.key: kv.value for kv in statuses[f'/pcrp_node: /{OBJECT}'].values}
+    assert values['scene_used'] == '1' and values['scene_missing'] == '1'
+    assert values['scene_topic'] == f'/{DEPTH}'
+
+
+def _without_z(msg):
+    msg.fields = [f for f in msg.fields if f.name != 'z']
+    return msg
+
+
+def _truncated(msg):
+    msg.data = bytes(msg.data)[:len(msg.data) // 3]
+    return msg
+
+
+BAD_SCENES = [
+    # (outcome counted, the scene published for the cloud's stamp: None for none)
+    ('missing', lambda view, h: None),
+    ('missing', lambda view, h: _depth_cloud(view, Header(stamp=Time(sec=h.stamp.sec + 100),
+                                                          frame_id=FRAME))),
+    ('rejected_other_frame', lambda view, h: _depth_cloud(view, _header(h.stamp.sec, 'other'))),
+    ('rejected_missing_field', lambda view, h: _without_z(_depth_cloud(view, h))),
+    ('rejected_truncated_data', lambda view, h: _truncated(_depth_cloud(view, h))),
+    ('rejected_empty', lambda view, h: xyz_to_pointcloud2(np.zeros((0, 3)), h)),
+    ('rejected_no_finite_points',
+     lambda view, h: xyz_to_pointcloud2(np.full((50, 3), np.nan), h)),
+]
+
+
+def test_a_cloud_whose_scene_is_missing_or_unusable_is_answered_without_it_and_counted(
+        stream, view):
+    said = []
+    node = stream.node
+    logger = node.get_logger()
+
+    class Recorder:
+        def warning(self, text):
+            said.append(text)
+
+        def __getattr__(self, name):
+            return getattr(logger, name)
+    node.get_logger = Recorder
+    assert node.set_parameters([Parameter('log_throttle_sec', value=60.0)])[0].successful
+    try:
+        for k, (outcome, make) in enumerate(BAD_SCENES):
+            sec = 100 + k
+            before = stream.scene_counts()
+            scene, _ = stream.send(view.points, sec, make(view, _header(sec)))
+            assert scene is None, outcome
+            after = stream.scene_counts()
+            assert after.pop(f'scene_{outcome}') == before.pop(f'scene_{outcome}', 0) + 1
+            assert after == before, outcome
+        # a scene the estimate fails with: the cloud is estimated again without it
+        stream.fail_with_scene = True
+        scene, answer = stream.send(view.points, 120, _depth_cloud(view, _header(120)))
+        assert scene is None and answer.gallery_id == 'cone'
+        assert stream.scene_counts()['scene_rejected_internal_error'] == 1
+        stream.fail_with_scene = False
+        # each kind logged once a throttle period, saying what was wrong
+        for outcome in [*dict(BAD_SCENES), 'rejected_internal_error']:
+            lines = [t for t in said if f'({outcome}, ' in t]
+            if outcome == 'missing':   # twice here, and maybe logged by the test before
+                assert len(lines) <= 1, said
+            else:
+                assert len(lines) == 1, said
+            assert all(f'/{DEPTH}:' in t for t in lines), said
+        assert any('a core that trips' in t for t in said)
+        # the stream goes on: a good scene is used again; none is read when no view uses it
+        scene, _ = stream.send(view.points, 130, _depth_cloud(view, _header(130)))
+        assert scene is not None
+        assert node.set_parameters([Parameter('sensor_at_origin', value=False)])[0].successful
+        try:
+            scene, _ = stream.send(view.points, 131, _depth_cloud(view, _header(131)))
+        finally:
+            node.set_parameters([Parameter('sensor_at_origin', value=True)])
+        assert scene is None and stream.scene_counts()['scene_unused'] == 1
+    finally:
+        del node.get_logger
+        node.set_parameters([Parameter('log_throttle_sec', value=5.0)])
+    assert stream.stats.counts['rejected'] == 0
+    assert stream.stats.counts['answered'] == stream.stats.counts['received']
+
+
+@pytest.mark.parametrize('inputs, scenes, expected', [
+    (['a', 'b'], [], {}),
+    (['a', 'b'], ['depth'], {'a': 'depth', 'b': 'depth'}),
+    (['a', 'b'], ['d1', 'd2'], {'a': 'd1', 'b': 'd2'}),
+])
+def test_scene_topics_are_one_shared_or_one_per_input_topic(inputs, scenes, expected):
+    settings = NodeSettings(input_topics=inputs, scene_topics=scenes)
+    assert settings.scene_topic_of() == expected
+
+
+def test_scene_topics_of_another_length_stop_the_node_with_one_clear_line():
+    import os
+    import subprocess
+    import sys
+    with pytest.raises(ValueError, match=r'scene_topics: expected one topic shared by every '
+                                         r'input topic or one per input topic \(3'):
+        NodeSettings(input_topics=['a', 'b', 'c'], scene_topics=['d1', 'd2'])
+    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 70) % 200 + 1)}
+    out = subprocess.run(
+        [sys.executable, '-m', 'pcrp_ros.node', '--ros-args', '-p', 'scene_topics:=[d1, d2]'],
+        capture_output=True, text=True, timeout=120, env=env)
+    assert out.returncode == 1 and 'Traceback' not in out.stderr, out.stderr
+    error = [line for line in out.stderr.splitlines() if 'pcrp_node: error:' in line]
+    assert len(error) == 1 and 'scene_topics' in error[0] and "['d1', 'd2']" in error[0], \
+        out.stderr
+
+
+def test_worker_processes_are_sent_the_cropped_scene_and_use_it(model, view, monkeypatch):
+    sent = []
+    estimate = ProcessEstimator.estimate
+
+    def recorded(self, points, viewpoint, up, params, scene=None):
+        sent.append(scene)
+        return estimate(self, points, viewpoint, up, params, scene)
+    monkeypatch.setattr(ProcessEstimator, 'estimate', recorded)
+    topic, depth_topic = 'scene_workers/object', 'scene_workers/depth'
+    with ros_context() as ctx:
+        node = PcrpNode(context=ctx, parameter_overrides=[
+            Parameter('workers', value=2), Parameter('input_topics', value=[topic]),
+            Parameter('scene_topics', value=[depth_topic]),
+            Parameter('qos_reliability', value='reliable'),
+            Parameter('min_confidence', value=0.0)])
+        client = rclpy.create_node('scene_workers_client', context=ctx)
+        objects = client.create_publisher(PointCloud2, f'/{topic}', RELIABLE)
+        scenes = client.create_publisher(PointCloud2, f'/{depth_topic}', RELIABLE)
+        stats = node.stats[topic]
+        depth = _depth_cloud(view, _header(3))
+        with spinning(ctx, node, client):
+            assert wait_for(lambda: objects.get_subscription_count()
+                            and scenes.get_subscription_count(), 10)
+            scenes.publish(depth)
+            assert wait_for(lambda: node.answerer._scenes.find(depth_topic, depth.header), 10)
+            objects.publish(xyz_to_pointcloud2(view.points, _header(3)))
+            assert wait_for(lambda: stats.counts['answered'] == 1, 120), dict(stats.counts)
+        assert stats.snapshot()['scene_used'] == 1
+        confidence = stats.confidence[-1]
+    screened = model.screen(view.points.astype(np.float64))
+    crop = model.scene_in_reach(screened, pointcloud2_to_xyz(depth), np.zeros(3))
+    assert len(sent) == 1 and sent[0].dtype == np.float32
+    np.testing.assert_allclose(sent[0], crop, atol=1e-6)
+    # the worker's answer is the one with the scene, not the one without
+    with_scene = model.estimate(screened, viewpoint=np.zeros(3), scene=sent[0]).confidence
+    without = model.estimate(screened, viewpoint=np.zeros(3)).confidence
+    assert abs(confidence - with_scene) < 0.02 < abs(confidence - without), \
+        (confidence, with_scene, without)
