@@ -323,6 +323,7 @@ def test_the_robot_report_quick_run_writes_its_files_and_holds_an_object_out(
     assert set(res['results']['free_occluded_seen']) == {'pcrp'}
     assert ([r['object_id'] for r in res['results']['free_occluded_seen']['pcrp']]
             == [r['object_id'] for r in res['results']['free_occluded']['pcrp']])
+    assert '| **all** | 12 |' in text    # 3 views in each of 4 scenarios: each view once
     (a, b, chamfer), = res['twins']['pairs']
     assert {a, b} == {'flat_box', 'flat_box_copy'} and chamfer < 0.0005
     # the model found the box and its copy one shape; the can is the one left to hold out
