@@ -29,8 +29,6 @@ SCENARIOS = {   # name: (kind, occluded, up known to the method, occluder given 
     'free_occluded_seen': ('free', True, False, True),
     'table_occluded_seen': ('table', True, True, True),
 }
-# the scenarios "all" pools: each view once
-BASE_SCENARIOS = ('free', 'table', 'free_occluded', 'table_occluded')
 SEEDS = {'test': 0, 'validation': 1000}
 METHODS = {
     'pcrp': 'pcrp (README recipe, defaults)',
