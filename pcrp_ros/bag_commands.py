@@ -195,35 +195,76 @@ def _make_bag(a) -> int:
 
 
 # -- process --------------------------------------------------------------------------------------
-def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None, up=None):
+def bag_scenes(bag, topic: str, clouds: list, model, viewpoint, problems: list) -> dict:
+    """
+    Return {index of a cloud: the part of its scene in reach}, as the node's scene_topics match.
+
+    The scene of a cloud is the message on topic with its stamp and frame (pcrp_ros/scenes.py);
+    depth clouds are read one at a time, and only what is in reach of a cloud is kept. None for a
+    cloud the model would use no scene for (not answered view by view).
+    """
+    from pcrp_ros.bags import scene_messages
+    from pcrp_ros.conversions import CloudFormatError
+    from pcrp_ros.scenes import scene_points
+
+    waiting = {}
+    for k, c in enumerate(clouds):
+        if c['error'] is None:
+            h = c['msg'].header
+            waiting.setdefault((h.stamp.sec, h.stamp.nanosec, h.frame_id), []).append(k)
+    found = {}
+    for msg in scene_messages(bag, topic, problems):
+        h = msg.header
+        key = (h.stamp.sec, h.stamp.nanosec, h.frame_id)
+        if key not in waiting:
+            continue
+        try:
+            scene = scene_points(msg, h.frame_id)
+            for k in waiting.pop(key):
+                found[k] = model.scene_in_reach(clouds[k]['points'], scene, viewpoint)
+        except Exception as e:  # as in the node: the clouds are answered without it
+            problems.append(f'{topic} @ {h.stamp.sec}.{h.stamp.nanosec:09d}: scene not used: '
+                            f'{e if isinstance(e, CloudFormatError) else type(e).__name__}')
+    return found
+
+
+def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None, up=None,
+                scene_topic=None):
     """
     Run the core over every cloud of a bag (or of the given topics).
 
     Writes the node's outputs into `out` and returns rows. Unreadable clouds become rows with
     their reason, never a stop. up: which way is up in the clouds' frame, as the node's
-    up_vector (None: unknown).
+    up_vector (None: unknown). scene_topic: the camera's depth clouds, each cloud answered with
+    the one of its stamp and frame (the node's scene_topics); rows then say whether one was
+    (scene: used, missing or unused).
     """
     from pcrp_core import InvalidCloud
     from pcrp_ros.bags import BagWriter, cloud_msg, pose_msg, read_bag, T
     from pcrp_ros.conversions import aligned_points
 
-    clouds, truths, problems = read_bag(bag, topics)
+    viewpoint = np.zeros(3) if sensor_at_origin else None
+    clouds, truths, problems = read_bag(bag, topics, leave=(scene_topic,))
+    scenes = (bag_scenes(bag, scene_topic, clouds, model, viewpoint, problems)
+              if scene_topic else {})
     for p in problems:
         print(f'pcrp: {bag}: {p}', file=sys.stderr)
     rows = []
     with BagWriter(out) as writer:
-        for c in clouds:
+        for k, c in enumerate(clouds):
             hdr = c['msg'].header
             row = {'topic': c['topic'], 'stamp': f'{hdr.stamp.sec}.{hdr.stamp.nanosec:09d}'}
+            if scene_topic:
+                row['scene'] = ('missing' if k not in scenes
+                                else 'unused' if scenes[k] is None else 'used')
             gt = truths.get((c['topic'], hdr.stamp.sec, hdr.stamp.nanosec))
             if c['error'] is not None:
                 row.update(status=f"rejected: {c['error'].reason}")
             else:
                 try:
                     t0 = time.perf_counter()
-                    r = model.estimate(
-                        c['points'], viewpoint=np.zeros(3) if sensor_at_origin else None, up=up
-                    )
+                    r = model.estimate(c['points'], viewpoint=viewpoint, up=up,
+                                       scene=scenes.get(k))
                     row['latency_ms'] = 1e3 * (time.perf_counter() - t0)
                 except InvalidCloud as e:
                     r, row['status'] = None, f'rejected: {e.reason}'
@@ -287,6 +328,11 @@ def summary(rows) -> str:
         if r.get('status', '').startswith('rejected'):
             reasons[r['status']] = reasons.get(r['status'], 0) + 1
     lines += [f'  {k}: {v}' for k, v in sorted(reasons.items())]
+    scenes = [r['scene'] for r in rows if 'scene' in r]
+    if scenes:
+        lines.append('scenes: ' + ', '.join(f'{k} {scenes.count(k)}'
+                                            for k in ('used', 'missing', 'unused')
+                                            if k in scenes))
     lat = [r['latency_ms'] for r in rows if 'latency_ms' in r]
     if lat:
         lines.append(f'latency ms: median {np.median(lat):.0f}, '
@@ -322,6 +368,9 @@ def register_process(sub) -> None:
     )
     p.add_argument('--up', default=None, metavar='X,Y,Z',
                    help="which way is up in the clouds' frame, as the node's up_vector")
+    p.add_argument('--scene-topic', default=None, metavar='TOPIC',
+                   help="the camera's whole depth clouds: each cloud is answered with the one "
+                   "of its stamp and frame, as the node's scene_topics")
     p.set_defaults(func=_process)
 
 
@@ -348,6 +397,7 @@ def _process(args) -> int:
         sensor_at_origin=not args.complete_objects,
         topics=args.topics,
         up=up,
+        scene_topic=args.scene_topic,
     )
     print(summary(rows))
     return 0 if rows else 1  # a partial read is reported above; nothing read at all is a failure

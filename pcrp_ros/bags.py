@@ -133,16 +133,19 @@ def _messages(path: Path, problems: list[str]):
         problems.append(f'{f.name}: salvaged {n} messages from the damaged file')
 
 
-def read_bag(path, topics=None):
+def read_bag(path, topics=None, leave=()):
     """
     Read (clouds, truths, problems) from a bag; a damaged bag yields what could be read.
 
     clouds are dicts of topic, timestamp, msg, points (or a format error); truths map (topic,
-    sec, nanosec) to ground truth; problems list what could not be read.
+    sec, nanosec) to ground truth; problems list what could not be read. leave: topics not read
+    at all (a camera's depth clouds, which scene_messages reads one at a time).
     """
     clouds, truths, problems = [], {}, []
     skipped = {}
     for topic, msgtype, ts, raw in _messages(Path(path), problems):
+        if topic in leave:
+            continue
         try:
             msg = TYPESTORE.deserialize_cdr(raw, msgtype)
         except Exception as e:  # a damaged message: skip it, keep the rest
@@ -170,3 +173,18 @@ def read_bag(path, topics=None):
     if not clouds and not absent:
         problems.append('no PointCloud2 messages found')
     return clouds, truths, problems
+
+
+def scene_messages(path, topic: str, problems: list[str]):
+    """Yield the bag's messages on topic one at a time, deserialized (a depth cloud is large)."""
+    found = False
+    for t, msgtype, _, raw in _messages(Path(path), []):
+        if t != topic or msgtype != CLOUD:
+            continue
+        found = True
+        try:
+            yield TYPESTORE.deserialize_cdr(raw, msgtype)
+        except Exception as e:  # a damaged message: skip it, keep the rest
+            problems.append(f'{topic}: unreadable message ({type(e).__name__})')
+    if not found:
+        problems.append(f'no clouds on the scene topic {topic}')

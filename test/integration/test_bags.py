@@ -124,3 +124,29 @@ def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path
         bag, tmp_path / 'up', model, quiet=True, topics=['segmented_object'], up=[0.0, -1.0, 0.0]
     )
     assert len(seen) == 3 and all(u == [0.0, -1.0, 0.0] for u in seen)
+
+
+def test_process_answers_each_cloud_with_the_depth_cloud_of_its_stamp(tmp_path):
+    from pcrp_core.evaluation.scenes import sample_scene
+    from pcrp_core.sources import load_source
+    from pcrp_ros.bags import BagWriter, cloud_msg, header
+
+    # the shipped gallery's cone, a quarter hidden; its depth cloud holds the occluder too
+    cone = next(o for o in load_source('household', split='train') if o.gallery_id == 'cone')
+    view = sample_scene(cone.mesh, 'cone', 14, 1, 'free', occlusion=True, seed=1)
+    depth = np.concatenate([view.points, view.occluder, np.full((20, 3), np.nan)])
+    bag = tmp_path / 'scenes'
+    with BagWriter(bag) as w:
+        for sec in (1, 2):   # the second cloud's depth cloud was not recorded
+            w.write('object', cloud_msg(view.points, header(sec, 0, 'cam')), sec * 10**9)
+        w.write('depth', cloud_msg(depth, header(1, 0, 'cam')), 10**9 + 1)
+        w.write('depth', cloud_msg(depth, header(3, 0, 'cam')), 3 * 10**9)
+    model = PCRP.load(None)
+    rows = process_bag(bag, tmp_path / 'out', model, quiet=True, scene_topic='depth')
+    # the depth topic is read as scenes only, never answered as an object
+    assert [(r['topic'], r['scene']) for r in rows] == [('object', 'used'), ('object', 'missing')]
+    assert rows[0]['gallery_id'] == rows[1]['gallery_id'] == 'cone'
+    assert rows[0]['confidence'] > rows[1]['confidence'] + 0.2
+    assert 'scenes: used 1, missing 1' in summary(rows)
+    out = _process_command(bag, tmp_path / 'cli', '--scene-topic', 'nothing/here')
+    assert out.returncode == 0 and 'no clouds on the scene topic nothing/here' in out.stderr
