@@ -39,6 +39,10 @@ import numpy as np
 from tools.bad_clouds import CASES, good_cloud, GoodCloud
 
 NODE_NAME = 'pcrp_soak_node'
+SCENE_TOPIC = 'pcrp_soak/depth'
+# a segmenter publishes a frame's objects after its depth cloud, by at least this much: a 3.7 MB
+# depth cloud published back to back with its objects can arrive after them
+SEGMENTER_SECONDS = 0.03
 # Fast DDS reads the file this variable names when a process creates its first participant
 PROFILE_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
 LARGE_CLOUDS_PROFILE = Path(__file__).resolve().parents[1] / 'config' / 'fastdds_large_clouds.xml'
@@ -192,10 +196,28 @@ def camera_clouds(n: int, bag=None) -> list[GoodCloud]:
     return out
 
 
+def depth_cloud(goods: list[GoodCloud], width: int = 640, height: int = 480):
+    """
+    Make a camera's whole depth cloud, organized, without a stamp: a table just behind the objects.
+
+    Every pixel of a 640 x 480 camera (f = 600) measures a plane 5 cm behind the farthest object,
+    so the whole of it lies in reach of every answer: the most the node reads and cuts per cloud.
+    """
+    from pcrp_ros.conversions import xyz_to_pointcloud2
+    from std_msgs.msg import Header
+
+    far = max(float(g.points[:, 2].max()) for g in goods) + 0.05
+    v, u = np.mgrid[0:height, 0:width]
+    rays = np.stack([(u - width / 2) / 600.0, (v - height / 2) / 600.0, np.ones(u.shape)], -1)
+    msg = xyz_to_pointcloud2(rays.reshape(-1, 3) * far, Header())
+    msg.height, msg.width, msg.row_step = height, width, width * msg.point_step
+    return msg
+
+
 def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_share: float = 0.2,
         model_path: str | None = None, seed: int = 0, processes: int = 1, progress=print,
         workers: int = 1, reliable: bool = False, driver_profile: str | None = None,
-        node_params: dict | None = None, bag=None) -> dict:
+        node_params: dict | None = None, bag=None, scene: bool = False) -> dict:
     from geometry_msgs.msg import PoseStamped
     from pcrp_core import PCRP
     from pcrp_ros.conversions import xyz_to_pointcloud2
@@ -217,6 +239,8 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     if reliable:
         # the node's accounting alone: nothing lost on the way, as a reliable replay gives
         params.update(qos_reliability='reliable', qos_depth=100)
+    if scene:
+        params['scene_topics'] = f'[{SCENE_TOPIC}]'
     nodes = _NodeProcesses(topics, processes, model_path, workers, params)
 
     rclpy.init()
@@ -226,6 +250,10 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
     for t in topics:
         client.create_subscription(PoseStamped, f'/{t}/pose', lambda m, t=t: poses.update([t]), 50)
     pubs = {t: client.create_publisher(PointCloud2, f'/{t}', QoSProfile(depth=10)) for t in topics}
+    depth = depth_cloud(goods) if scene else None
+    if scene:
+        pubs[SCENE_TOPIC] = client.create_publisher(PointCloud2, f'/{SCENE_TOPIC}',
+                                                    QoSProfile(depth=10))
     executor = SingleThreadedExecutor()
     executor.add_node(client)
     spin = threading.Thread(target=executor.spin, daemon=True)
@@ -255,8 +283,14 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
             # a tick sent half a period late is the driver's stall, not the node's: the clouds it
             # owes then go out back to back, a burst no camera sends
             late += time.monotonic() - (t0 + tick / rate) > 0.5 / rate
+            frame = Header(stamp=client.get_clock().now().to_msg(),
+                           frame_id='camera_optical_frame')
+            if scene:   # one camera frame: its depth cloud, then the objects cut from it
+                depth.header = frame
+                pubs[SCENE_TOPIC].publish(depth)
+                time.sleep(SEGMENTER_SECONDS)
             for k, t in enumerate(topics):
-                header = Header(
+                header = frame if scene else Header(
                     stamp=client.get_clock().now().to_msg(), frame_id='camera_optical_frame'
                 )
                 if rng.random() < bad_share:
@@ -326,6 +360,7 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
         rate,
         bad_share,
         str(nodes.dir),
+        scene,
     )
     result['processes'] = processes
     result['workers'] = workers
@@ -338,7 +373,8 @@ def run(duration: float = 600.0, rate: float = 10.0, n_topics: int = 4, bad_shar
 
 
 def _summarise(
-    topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, log_path
+    topics, sent, diag, poses, rss, alive, code, log, duration, rate, bad_share, log_path,
+    scene=False
 ) -> dict:
     per_topic = {}
     checks = {
@@ -361,6 +397,8 @@ def _summarise(
                 'age_p95_ms',
             )
         }
+        if scene:
+            d.update({k: diag.get(t, k) for k in ('scene_used', 'scene_missing')})
         s = sent[t]
         bad_counted = all(
             diag.get(t, f'rejected_{k[4:]}') == v for k, v in s.items() if k.startswith('bad_')
@@ -375,6 +413,12 @@ def _summarise(
             good_accounted
         )
         checks[f'{t}: a pose published for every answer'] = poses[t] == d['answered']
+        if scene:
+            # best-effort transport may lose a frame's depth cloud (3.7 MB): then its clouds are
+            # answered without one, counted as missing
+            checks[f'{t}: every good cloud estimated counted with its depth cloud or without'] = (
+                d['scene_used'] + d['scene_missing']
+                == d['answered'] + d['rejected_low_confidence'])
     warm = [m for s, m in rss if s >= 0.2 * duration] or [m for _, m in rss]
     growth = warm[-1] / warm[0] - 1.0 if warm else float('nan')
     checks['resident memory flat within 10 % after warm-up'] = bool(abs(growth) <= 0.10)
@@ -412,6 +456,10 @@ def table(result: dict) -> str:
             f"| {d['age_p50_ms']:.0f} / {d['age_p95_ms']:.0f} |"
         )
     rows.append('')
+    scenes = [f"{t} used {d['scene_used']:.0f}, missing {d['scene_missing']:.0f}"
+              for t, d in result['per_topic'].items() if 'scene_used' in d]
+    if scenes:
+        rows += ['Clouds estimated with their depth cloud: ' + '; '.join(scenes) + '.', '']
     who = (
         'the node'
         if result.get('processes', 1) == 1
@@ -449,6 +497,9 @@ def register(sub) -> None:
     p.add_argument('--driver-profile', default=None,
                    help='Fast DDS profile the clouds are published with (default: Fast DDS '
                         f'defaults; {LARGE_CLOUDS_PROFILE.name} for bursts of large clouds)')
+    p.add_argument('--scene', action='store_true',
+                   help="also publish each frame's whole depth cloud (640 x 480) and give the "
+                   'node scene_topics; the topics then share one stamp per frame')
     p.set_defaults(func=_soak)
 
 
@@ -464,6 +515,7 @@ def _soak(args) -> int:
         workers=args.workers,
         driver_profile=args.driver_profile,
         bag=args.bag,
+        scene=args.scene,
     )
     print(table(result))
     if args.json:

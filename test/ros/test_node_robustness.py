@@ -239,6 +239,18 @@ def test_a_short_soak_accounts_for_every_cloud(capsys):
         )
 
 
+def test_a_short_soak_with_depth_clouds_answers_with_them_and_accounts_for_every_cloud():
+    from tools.soak import run
+    result = run(duration=10.0, rate=5.0, n_topics=1, bad_share=0.3, reliable=True, scene=True)
+    # memory is not yet flat 2 s into a run that fills buffers of 3.7 MB depth clouds
+    failed = [name for name, ok in result['checks'].items()
+              if not ok and not name.startswith('resident memory')]
+    assert not failed, (failed, result['per_topic'], result['node_log'])
+    (d,) = result['per_topic'].values()
+    # every good cloud estimated was answered with its frame's depth cloud or counted without
+    assert d['scene_used'] > 0 and d['sent_bad'] > 0 and d['answered'] > 0
+
+
 def test_rejections_are_logged_once_per_reason_per_throttle_period(model):
     with ros_context() as ctx:
         node = PcrpNode(
