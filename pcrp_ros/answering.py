@@ -54,7 +54,7 @@ from pcrp_ros.conversions import aligned_points, CloudFormatError, detections_ms
 from pcrp_ros.conversions import pointcloud2_to_xyz, pose_stamped, xyz_to_pointcloud2
 from pcrp_ros.engine import Engine, load_engine, LOAD_ERRORS, ReloadRequest
 from pcrp_ros.parameters import descriptor, MODEL_SETTINGS, NodeSettings, parameters, ros_value
-from pcrp_ros.scenes import scene_points, SceneBuffer
+from pcrp_ros.scenes import Scenes
 from pcrp_ros.stats import StreamStats
 from pcrp_ros.workers import ProcessEstimator, WorkerDied
 from rcl_interfaces.msg import SetParametersResult
@@ -107,8 +107,7 @@ class CloudAnswerer:
         self._resolved = {}
         self._pubs = {}
         self._subs = []
-        self._scene_topic = self.settings.scene_topic_of()   # input topic -> its scene topic
-        self._scenes = SceneBuffer()
+        self._scenes = Scenes(self.settings.scene_topic_of())
         self._scene_subs = []
         self._diag = None
         self._timer = None
@@ -178,7 +177,7 @@ class CloudAnswerer:
         for scene_topic in dict.fromkeys(s.scene_topics):   # each once, in order
             self._scene_subs.append(self.node.create_subscription(
                 PointCloud2, scene_topic,
-                lambda msg, t=scene_topic: self._scenes.add(t, msg), qos,
+                lambda msg, t=scene_topic: self._scenes.buffer.add(t, msg), qos,
                 callback_group=MutuallyExclusiveCallbackGroup()))
             self._resolved[scene_topic] = self._scene_subs[-1].topic_name
         self._diag = self.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
@@ -215,7 +214,7 @@ class CloudAnswerer:
         for sub in self._subs + self._scene_subs:
             self.node.destroy_subscription(sub)
         self._subs, self._scene_subs = [], []
-        self._scenes.clear()
+        self._scenes.buffer.clear()
         for group in pubs.values():
             for pub in group.values():
                 self.node.destroy_publisher(pub)
@@ -380,7 +379,7 @@ class CloudAnswerer:
         except Exception as e:   # nothing one message holds may take the subscription down
             self.reject(topic, 'internal_error', f'{type(e).__name__}: {e}')
             return
-        item = Waiting(msg.header, points, received, self._queued_scene(topic, msg))
+        item = Waiting(msg.header, points, received, self._scenes.on_arrival(topic, msg.header))
         with self._cv:
             waiting = self._slots.setdefault(topic, collections.deque())
             while len(waiting) >= self.settings.queue_size:
@@ -524,7 +523,10 @@ class CloudAnswerer:
         without it, so no scene costs a cloud its answer.
         """
         viewpoint = np.zeros(3) if self._param('sensor_at_origin') else None
-        scene, outcome = self._scene_for(topic, item, engine.model, viewpoint)
+        scene, outcome, why = self._scenes.scene(topic, item.header, item.points, item.scene,
+                                                 engine.model, viewpoint)
+        if why is not None:
+            self._without_scene(topic, outcome, why)
         estimate = engine.estimators[k].estimate
         try:
             if scene is not None:
@@ -542,52 +544,11 @@ class CloudAnswerer:
                 self.stats[topic].scene(outcome)
 
     # -- scenes -------------------------------------------------------------------------------
-    def _queued_scene(self, topic: str, msg: PointCloud2):
-        """Return the scene message of an arriving cloud, if it has come (kept, unread)."""
-        scene_topic = self._scene_topic.get(topic)
-        return None if scene_topic is None else self._scenes.find(scene_topic, msg.header)
-
-    def _scene_message(self, topic: str, item: Waiting):
-        """Return the cloud's scene message: the one found on arrival, else one come since."""
-        if item.scene is not None and item.scene.header.frame_id == item.header.frame_id:
-            return item.scene
-        return self._scenes.find(self._scene_topic[topic], item.header) or item.scene
-
-    def _scene_for(self, topic: str, item: Waiting, model, viewpoint):
-        """
-        Return (scene, outcome): what of the cloud's scene the estimate can use, and its count.
-
-        outcome is None when the topic has no scene topic, else what StreamStats.scene counts:
-        used, unused (the model would use none), missing, or rejected_<reason>. Nothing a scene
-        message holds is raised.
-        """
-        if topic not in self._scene_topic:
-            return None, None
-        if not model.uses_views(viewpoint):
-            return None, 'unused'   # not read at all: the estimate would ignore it
-        msg = self._scene_message(topic, item)
-        if msg is None:
-            return None, self._without_scene(
-                topic, 'missing', f'none of the last {self._scenes.size} is stamped as the '
-                'cloud (a segmenter must stamp each cloud as the depth cloud it cut it from)')
-        try:
-            scene = model.scene_in_reach(item.points, scene_points(msg, item.header.frame_id),
-                                         viewpoint)
-        except CloudFormatError as e:
-            return None, self._without_scene(topic, f'rejected_{e.reason}', str(e))
-        except Exception as e:   # nothing one message holds may cost the cloud its answer
-            return None, self._without_scene(topic, 'rejected_internal_error',
-                                             f'{type(e).__name__}: {e}')
-        if scene is None:
-            return None, 'unused'
-        # depth clouds are float32: halves what reaches a worker process, and loses nothing
-        return scene.astype(np.float32), 'used'
-
     def _without_scene(self, topic: str, outcome: str, why: str) -> str:
         """Log why a cloud goes without its scene, once per kind per log_throttle_sec."""
         if self._due((topic, 'scene', outcome)):
             total = self.stats[topic].scenes[outcome] + 1   # counted once it is estimated
-            scene_topic = self._scene_topic[topic]
+            scene_topic = self._scenes.topic_of[topic]
             self._log().warning(f'{topic}: cloud answered without a scene ({outcome}, {total} so '
                                 f'far): {self._resolved.get(scene_topic, scene_topic)}: {why}')
         return outcome
@@ -629,8 +590,8 @@ class CloudAnswerer:
         for topic, stats in self.stats.items():
             ok, text = stats.status()
             values = stats.snapshot()
-            if topic in self._scene_topic:
-                scene_topic = self._scene_topic[topic]
+            if topic in self._scenes.topic_of:
+                scene_topic = self._scenes.topic_of[topic]
                 values['scene_topic'] = self._resolved.get(scene_topic, scene_topic)
             arr.status.append(DiagnosticStatus(
                 level=DiagnosticStatus.OK if ok else DiagnosticStatus.WARN,

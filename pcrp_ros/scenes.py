@@ -89,3 +89,54 @@ def scene_points(msg, frame_id: str) -> np.ndarray:
         raise CloudFormatError('no_finite_points',
                                f"none of the scene's {len(points)} points is finite")
     return finite
+
+
+class Scenes:
+    """
+    The depth clouds each input topic's clouds are answered with, and what of one a cloud uses.
+
+    topic_of: input topic -> its scene topic; the messages kept as they came (buffer).
+    """
+
+    def __init__(self, topic_of: dict, size: int = SCENE_BUFFER):
+        self.topic_of = dict(topic_of)
+        self.buffer = SceneBuffer(size)
+
+    def on_arrival(self, topic: str, header):
+        """Return the scene message of a cloud arriving on topic, if it has come (kept, unread)."""
+        scene_topic = self.topic_of.get(topic)
+        return None if scene_topic is None else self.buffer.find(scene_topic, header)
+
+    def message(self, topic: str, header, kept):
+        """Return a cloud's scene message: the one kept on arrival, else one come since."""
+        if kept is not None and kept.header.frame_id == header.frame_id:
+            return kept
+        return self.buffer.find(self.topic_of[topic], header) or kept
+
+    def scene(self, topic: str, header, points, kept, model, viewpoint) -> tuple:
+        """
+        Return (scene, outcome, why): what of a cloud's scene its estimate can use, and the count.
+
+        outcome is None when the topic has no scene topic, else what StreamStats.scene counts:
+        used, unused (the model would use none), missing, or rejected_<reason>; why says why a
+        scene was missing or unusable (None otherwise). Nothing a scene message holds is raised.
+        """
+        if topic not in self.topic_of:
+            return None, None, None
+        if not model.uses_views(viewpoint):
+            return None, 'unused', None   # not read at all: the estimate would ignore it
+        msg = self.message(topic, header, kept)
+        if msg is None:
+            return None, 'missing', (
+                f'none of the last {self.buffer.size} is stamped as the cloud (a segmenter must '
+                'stamp each cloud as the depth cloud it cut it from)')
+        try:
+            scene = model.scene_in_reach(points, scene_points(msg, header.frame_id), viewpoint)
+        except CloudFormatError as e:
+            return None, f'rejected_{e.reason}', str(e)
+        except Exception as e:   # nothing one message holds may cost the cloud its answer
+            return None, 'rejected_internal_error', f'{type(e).__name__}: {e}'
+        if scene is None:
+            return None, 'unused', None
+        # depth clouds are float32: halves what reaches a worker process, and loses nothing
+        return scene.astype(np.float32), 'used', None

@@ -104,7 +104,7 @@ class Stream:
         """Publish the scene (if any), then the cloud once the node holds it; await the answer."""
         if scene is not None:
             self.scenes.publish(scene)
-            buffered = self.node.answerer._scenes
+            buffered = self.node.answerer._scenes.buffer
             assert wait_for(lambda: buffered.find(DEPTH, scene.header) is not None, 10)
         before = self.stats.counts['answered']
         self.objects.publish(xyz_to_pointcloud2(cloud, _header(sec, frame)))
@@ -283,7 +283,8 @@ def test_worker_processes_are_sent_the_cropped_scene_and_use_it(model, view, mon
             assert wait_for(lambda: objects.get_subscription_count()
                             and scenes.get_subscription_count(), 10)
             scenes.publish(depth)
-            assert wait_for(lambda: node.answerer._scenes.find(depth_topic, depth.header), 10)
+            kept = node.answerer._scenes.buffer
+            assert wait_for(lambda: kept.find(depth_topic, depth.header), 10)
             objects.publish(xyz_to_pointcloud2(view.points, _header(3)))
             assert wait_for(lambda: stats.counts['answered'] == 1, 120), dict(stats.counts)
         assert stats.snapshot()['scene_used'] == 1
