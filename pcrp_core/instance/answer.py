@@ -43,7 +43,7 @@ def answer(
     up, up_object = (None, None) if up_pair is None else up_pair
     match = model.matcher.match(
         pts - viewpoint, model.instance_options, up, up_object, rng, timings,
-        scene=None if scene is None else np.asarray(scene, dtype=np.float64) - viewpoint,
+        scene=None if scene is None else np.asarray(scene) - viewpoint,
     )
     best = match.best
     if model.view_calibration is not None:

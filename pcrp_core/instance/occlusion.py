@@ -55,6 +55,13 @@ def _rays(points: np.ndarray) -> np.ndarray:
     return points[:, :2] / points[:, 2:3]
 
 
+def _window(cloud: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return the corners (ray coordinates) of the cloud's rays widened by reach at its nearest."""
+    own = _rays(cloud)
+    widen = reach / max(float(cloud[:, 2].min()), 1e-6)
+    return own.min(axis=0) - widen, own.max(axis=0) + widen
+
+
 def in_reach(scene: np.ndarray, cloud: np.ndarray, reach: float) -> np.ndarray:
     """
     Return the scene's points that can hide part of an object the cloud shows, as (K, 3) floats.
@@ -65,11 +72,11 @@ def in_reach(scene: np.ndarray, cloud: np.ndarray, reach: float) -> np.ndarray:
     """
     scene = np.asarray(scene).reshape(-1, 3)
     z = scene[:, 2]
+    lo, hi = _window(cloud, reach)
     with np.errstate(invalid='ignore'):
         scene = scene[(z > 1e-6) & (z < float(cloud[:, 2].max()) + reach)]
-        rays, own = _rays(scene), _rays(cloud)
-        widen = reach / max(float(cloud[:, 2].min()), 1e-6)
-        window = (rays >= own.min(axis=0) - widen) & (rays <= own.max(axis=0) + widen)
+        rays = _rays(scene)
+        window = (rays >= lo) & (rays <= hi)
     return scene[window.all(axis=1)].astype(np.float64)
 
 
@@ -91,13 +98,10 @@ def occluders(scene: np.ndarray, cloud: np.ndarray, spacing: float,
     scene = in_reach(scene, cloud, reach)
     if not len(scene):
         return None
-    own = _rays(cloud)
-    widen = reach / float(cloud[:, 2].min())
-    origin = own.min(axis=0) - widen
-    span = float((own.max(axis=0) + widen - origin).max())
+    origin, corner = _window(cloud, reach)
     # at most MAX_CELLS a side, whatever a clumped cloud's spacing
-    cell = max(spacing / float(np.median(cloud[:, 2])), span / MAX_CELLS)
-    shape = _cells(own.max(axis=0) + widen, origin, cell) + 1
+    cell = max(spacing / float(np.median(cloud[:, 2])), float((corner - origin).max()) / MAX_CELLS)
+    shape = _cells(corner, origin, cell) + 1
     grid = np.full(tuple(shape), np.inf)
     ij = np.clip(_cells(_rays(scene), origin, cell), 0, shape - 1)
     np.minimum.at(grid, (ij[:, 0], ij[:, 1]), scene[:, 2])
@@ -105,7 +109,7 @@ def occluders(scene: np.ndarray, cloud: np.ndarray, spacing: float,
     grid = minimum_filter(grid, size=3, mode='nearest')
     # where the object itself was seen nothing hid it (its cells and their neighbours: a cloud
     # thinned to its spacing leaves some of its own cells empty)
-    i, j = _cells(own, origin, cell).T
+    i, j = _cells(_rays(cloud), origin, cell).T
     for di in (-1, 0, 1):
         for dj in (-1, 0, 1):
             grid[np.clip(i + di, 0, shape[0] - 1), np.clip(j + dj, 0, shape[1] - 1)] = np.inf

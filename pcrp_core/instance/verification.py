@@ -121,9 +121,9 @@ def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray,
     Return the Fit of the object (surface, in its own frame) at pose (R, t) to the query.
 
     expected: indices of the surface points the camera would see (less those the query's
-    occluders hide). unshown_weight: how much an
-    expected point missing from the cloud costs against a cloud point off the object (less than 1:
-    the segmenter may have cut away what something in front of the object hid).
+    occluders hide). unshown_weight: how much an expected point missing from the cloud costs
+    against a cloud point off the object (less than 1: the segmenter may have cut away what
+    something in front of the object hid).
     """
     to_object = distances((query.points - t) @ R, surface)
     shown = surface.points[expected] @ R.T + t
