@@ -27,6 +27,7 @@ import importlib
 _EXPORTS = {
     'PCRP': 'pcrp_core.pipeline',
     'default_model_path': 'pcrp_core.pipeline',
+    'DepthImage': 'pcrp_core.instance.depth_image',
     'PoseResult': 'pcrp_core.result',
     'InvalidCloud': 'pcrp_core.errors',
     'ModelError': 'pcrp_core.errors',

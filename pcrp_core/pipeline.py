@@ -35,6 +35,7 @@ from pcrp_core.errors import ModelError
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
 from pcrp_core.geometry import normalised, rms_radius, unit_axis, unit_vector
+from pcrp_core.instance.depth_image import DepthImage
 from pcrp_core.instance.templates import Templates
 from pcrp_core.preprocess import clean, screen, Screened
 from pcrp_core.result import PoseResult
@@ -351,23 +352,25 @@ class PCRP:
         return (self.templates is not None and viewpoint is not None and opts.method != 'pcrp'
                 and opts.scale_mode == 'metric')
 
-    def scene_in_reach(self, points, scene, viewpoint) -> np.ndarray | None:
+    def scene_in_reach(self, points, scene, viewpoint):
         """
-        Return the part of scene (M, 3) that estimate(points, viewpoint, scene=...) can use.
+        Return the part of scene that estimate(points, viewpoint, scene=...) can use.
 
-        None when it uses none (the cloud is not answered view by view). A caller that queues or
-        ships clouds (the node) keeps this instead of a whole depth cloud.
+        scene: (M, 3) points, returned as (K, 3) floats, or a DepthImage, returned cropped. None
+        when it uses none (the cloud is not answered view by view). A caller that queues or ships
+        clouds (the node) keeps this instead of a whole depth cloud.
         """
         if not self.uses_views(viewpoint):
             return None
-        from pcrp_core.instance.occlusion import in_reach
+        from pcrp_core.instance.occlusion import in_reach, seen_from
 
         vp = np.asarray(viewpoint, dtype=np.float64)
         pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         pts = pts[np.isfinite(pts).all(axis=1)] - vp
         if not len(pts) or pts[:, 2].min() <= 0:
             return None
-        return in_reach(np.asarray(scene) - vp, pts, float(self.templates.diameter.max())) + vp
+        cut = in_reach(seen_from(scene, vp), pts, float(self.templates.diameter.max()))
+        return cut if isinstance(cut, DepthImage) else cut + vp
 
     def warm(self) -> 'PCRP':
         """
@@ -401,7 +404,8 @@ class PCRP:
         way is up in the cloud's frame (against gravity), when the caller knows it; answers then
         keep the gallery's up axis (`up_axis`) on it. None: any orientation. scene: (M, 3) the rest
         of what the sensor measured, in the cloud's frame (its whole depth cloud will do: NaNs, the
-        object's own points and the background are fine), so that surface something in front of
+        object's own points and the background are fine), or its DepthImage (faster: an organized
+        depth cloud read with DepthImage.from_organized), so that surface something in front of
         the object hid is not taken for missing; used when the cloud is answered view by view.
         """
         from pcrp_core.category import answer as category

@@ -143,10 +143,10 @@ def evaluate(model, scenes: list[Scene], meshes: dict[str, Mesh], use_up: bool =
     Per-view records of model.estimate on every scene, as the node calls it.
 
     The cloud is in the camera's frame (viewpoint at the origin) and, with use_up, the table's
-    normal is given as up; with use_scene, what the camera measured of an occluder is given
-    beside the object's own points as the scene. seconds is the wall time of the call. A cloud
-    the model refuses (InvalidCloud) is a rejected view without an answer. twins: by default the
-    model's own.
+    normal is given as up; with use_scene, what the camera measured of the object and its occluder
+    is given as the scene, a depth image as the node reads a camera's depth cloud. seconds is the
+    wall time of the call. A cloud the model refuses (InvalidCloud) is a rejected view without an
+    answer. twins: by default the model's own.
     """
     from pcrp_core.errors import InvalidCloud
 
@@ -155,8 +155,7 @@ def evaluate(model, scenes: list[Scene], meshes: dict[str, Mesh], use_up: bool =
     rows = []
     for scene in progress(scenes, desc='estimate') if progress is not None else scenes:
         up = scene.up if use_up else None
-        seen = (np.vstack([scene.points, scene.occluder])
-                if use_scene and scene.occluder is not None else None)
+        seen = scene.depth_image() if use_scene and scene.occluder is not None else None
         t0 = time.perf_counter()
         try:
             answer, reason = model.estimate(scene.points, viewpoint=np.zeros(3), up=up,

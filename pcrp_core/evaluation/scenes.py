@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from pcrp_core.geometry import rotation_taking
+from pcrp_core.instance.depth_image import DepthImage
 from pcrp_core.sources.camera import depth_points, Mesh, PinholeCamera, RangeNoise, render_depth
 from scipy.spatial.transform import Rotation
 
@@ -67,6 +68,18 @@ class Scene:
     object_index: int = 0
     # the occluder's pixels as measured (range noise), float32; None when nothing hides the object
     occluder: np.ndarray | None = None
+    camera: PinholeCamera = PinholeCamera()     # the camera that measured them
+
+    def depth_image(self) -> DepthImage:
+        """
+        Return what the camera measured, the object and any occluder, as a depth image.
+
+        What a node given the camera's organized depth cloud answers with (pcrp_ros/scenes.py).
+        """
+        seen = self.points if self.occluder is None else np.vstack([self.points, self.occluder])
+        cam = self.camera
+        return DepthImage.from_points(seen, (cam.fx, cam.fy), (cam.cx, cam.cy),
+                                      (cam.height, cam.width))
 
     @property
     def occluded(self) -> bool:
@@ -234,6 +247,7 @@ def sample_scene(mesh: Mesh, object_id: str, object_index: int, view: int, kind:
             int(view),
             int(object_index),
             None if occluder is None else occluder.astype(np.float32),
+            camera,
         )
     raise RuntimeError(
         f'{object_id}: no {kind} view with {min_pixels} pixels in {POSE_TRIES} tries '

@@ -21,6 +21,7 @@ import numpy as np
 
 from pcrp_core.config import QueryOptions
 from pcrp_core.instance.calibration import features
+from pcrp_core.instance.occlusion import seen_from
 from pcrp_core.result import PoseResult
 
 
@@ -43,7 +44,7 @@ def answer(
     up, up_object = (None, None) if up_pair is None else up_pair
     match = model.matcher.match(
         pts - viewpoint, model.instance_options, up, up_object, rng, timings,
-        scene=None if scene is None else np.asarray(scene) - viewpoint,
+        scene=None if scene is None else seen_from(scene, viewpoint),
     )
     best = match.best
     if model.view_calibration is not None:

@@ -220,8 +220,8 @@ class InstanceMatcher:
         up: the up direction in that frame when known, with up_object the objects' up axis.
         exclude: gallery indices not to consider (how a calibration asks what the answer would
         be if the object were not in the gallery).
-        scene: (M, 3) what else the camera measured, in the same frame: surface an answer expects
-        behind it is not counted missing (occlusion.py).
+        scene: (M, 3) what else the camera measured, in the same frame, or its DepthImage:
+        surface an answer expects behind it is not counted missing (occlusion.py).
         """
         import open3d as o3d
 
