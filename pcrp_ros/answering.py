@@ -52,6 +52,7 @@ from pcrp_core import InvalidCloud
 from pcrp_core.config import PoseOptions, QueryOptions
 from pcrp_ros.conversions import aligned_points, CloudFormatError, detections_msg
 from pcrp_ros.conversions import pointcloud2_to_xyz, pose_stamped, xyz_to_pointcloud2
+from pcrp_ros.depth_images import camera_info_topic
 from pcrp_ros.engine import Engine, load_engine, LOAD_ERRORS, ReloadRequest
 from pcrp_ros.parameters import descriptor, MODEL_SETTINGS, NodeSettings, parameters, ros_value
 from pcrp_ros.scenes import Scenes
@@ -61,7 +62,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import PointCloud2
+from sensor_msgs.msg import CameraInfo, Image, PointCloud2
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 
@@ -174,12 +175,18 @@ class CloudAnswerer:
                 pass
             self._pubs[topic] = pubs
             self.stats.setdefault(topic, StreamStats())
+        images = s.scene_type == 'depth_image'
         for scene_topic in dict.fromkeys(s.scene_topics):   # each once, in order
             self._scene_subs.append(self.node.create_subscription(
-                PointCloud2, scene_topic,
+                Image if images else PointCloud2, scene_topic,
                 lambda msg, t=scene_topic: self._scenes.buffer.add(t, msg), qos,
                 callback_group=MutuallyExclusiveCallbackGroup()))
             self._resolved[scene_topic] = self._scene_subs[-1].topic_name
+            if images:   # the camera's intrinsics, which drivers publish with each image
+                self._scene_subs.append(self.node.create_subscription(
+                    CameraInfo, camera_info_topic(self._resolved[scene_topic]),
+                    lambda msg, t=scene_topic: self._scenes.on_camera_info(t, msg),
+                    qos, callback_group=MutuallyExclusiveCallbackGroup()))
         self._diag = self.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._timer = self.node.create_timer(1.0, self.publish_diagnostics)
         with self._cv:
@@ -214,7 +221,7 @@ class CloudAnswerer:
         for sub in self._subs + self._scene_subs:
             self.node.destroy_subscription(sub)
         self._subs, self._scene_subs = [], []
-        self._scenes.buffer.clear()
+        self._scenes.clear()
         for group in pubs.values():
             for pub in group.values():
                 self.node.destroy_publisher(pub)

@@ -199,13 +199,14 @@ def bag_scenes(bag, topic: str, clouds: list, model, viewpoint, problems: list) 
     """
     Return {index of a cloud: the part of its scene in reach}, as the node's scene_topics match.
 
-    The scene of a cloud is the message on topic with its stamp and frame (pcrp_ros/scenes.py);
-    depth clouds are read one at a time, and only what is in reach of a cloud is kept. None for a
-    cloud the model would use no scene for (not answered view by view).
+    The scene of a cloud is the message on topic with its stamp and frame (pcrp_ros/scenes.py):
+    a depth cloud, or a depth image read with the CameraInfo recorded beside it. They are read
+    one at a time, and only what is in reach of a cloud is kept. None for a cloud the model would
+    use no scene for (not answered view by view).
     """
     from pcrp_ros.bags import scene_messages
     from pcrp_ros.conversions import CloudFormatError
-    from pcrp_ros.scenes import scene_points
+    from pcrp_ros.scenes import read_frame
 
     waiting = {}
     for k, c in enumerate(clouds):
@@ -213,13 +214,13 @@ def bag_scenes(bag, topic: str, clouds: list, model, viewpoint, problems: list) 
             h = c['msg'].header
             waiting.setdefault((h.stamp.sec, h.stamp.nanosec, h.frame_id), []).append(k)
     found = {}
-    for msg in scene_messages(bag, topic, problems):
+    for msg, camera_info in scene_messages(bag, topic, problems):
         h = msg.header
         key = (h.stamp.sec, h.stamp.nanosec, h.frame_id)
         if key not in waiting:
             continue
         try:
-            scene = scene_points(msg, h.frame_id)
+            scene = read_frame(msg, h.frame_id, camera_info)
             for k in waiting.pop(key):
                 found[k] = model.scene_in_reach(clouds[k]['points'], scene, viewpoint)
         except Exception as e:  # as in the node: the clouds are answered without it
@@ -235,16 +236,18 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
 
     Writes the node's outputs into `out` and returns rows. Unreadable clouds become rows with
     their reason, never a stop. up: which way is up in the clouds' frame, as the node's
-    up_vector (None: unknown). scene_topic: the camera's depth clouds, each cloud answered with
-    the one of its stamp and frame (the node's scene_topics); rows then say whether one was
-    (scene: used, missing or unused).
+    up_vector (None: unknown). scene_topic: the camera's depth clouds or depth images, each cloud
+    answered with the one of its stamp and frame (the node's scene_topics); rows then say whether
+    one was (scene: used, missing or unused).
     """
     from pcrp_core import InvalidCloud
     from pcrp_ros.bags import BagWriter, cloud_msg, pose_msg, read_bag, T
     from pcrp_ros.conversions import aligned_points
+    from pcrp_ros.depth_images import camera_info_topic
 
     viewpoint = np.zeros(3) if sensor_at_origin else None
-    clouds, truths, problems = read_bag(bag, topics, leave=(scene_topic,))
+    leave = (scene_topic, camera_info_topic(scene_topic)) if scene_topic else ()
+    clouds, truths, problems = read_bag(bag, topics, leave=leave)
     scenes = (bag_scenes(bag, scene_topic, clouds, model, viewpoint, problems)
               if scene_topic else {})
     for p in problems:
@@ -369,8 +372,9 @@ def register_process(sub) -> None:
     p.add_argument('--up', default=None, metavar='X,Y,Z',
                    help="which way is up in the clouds' frame, as the node's up_vector")
     p.add_argument('--scene-topic', default=None, metavar='TOPIC',
-                   help="the camera's whole depth clouds: each cloud is answered with the one "
-                   "of its stamp and frame, as the node's scene_topics")
+                   help="the camera's whole depth clouds, or depth images (with the CameraInfo "
+                   'on camera_info beside them): each cloud is answered with the one of its '
+                   "stamp and frame, as the node's scene_topics")
     p.set_defaults(func=_process)
 
 

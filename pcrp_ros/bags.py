@@ -29,12 +29,15 @@ from pathlib import Path
 
 import numpy as np
 from pcrp_ros.conversions import CloudFormatError, pack_points, pointcloud2_to_xyz
+from pcrp_ros.depth_images import camera_info_topic
 from pcrp_ros.mcap_salvage import salvage
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import get_typestore, Stores
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 CLOUD = 'sensor_msgs/msg/PointCloud2'
+IMAGE = 'sensor_msgs/msg/Image'
+CAMERA_INFO = 'sensor_msgs/msg/CameraInfo'
 STRING = 'std_msgs/msg/String'
 POSE = 'geometry_msgs/msg/PoseStamped'
 log = logging.getLogger('pcrp.bags')
@@ -98,23 +101,27 @@ class BagWriter:
         self._writer.write(self._conns[topic], timestamp_ns, TYPESTORE.serialize_cdr(msg, typ))
 
 
-def _messages(path: Path, problems: list[str]):
+def _messages(path: Path, problems: list[str], kinds=(CLOUD,), skip=()):
     """
-    (topic, msgtype, timestamp, raw CDR) of the bag's messages.
+    (topic, msgtype, timestamp, raw CDR) of the bag's messages of the types kinds and ground truth.
 
-    A bag rosbags cannot open whole is read as far as it goes when it is MCAP (a recording cut
-    short); an SQLite file cut short cannot be read at all (its page count no longer matches).
+    skip: topics neither read nor reported as ignored (what another pass reads). A bag rosbags
+    cannot open whole is read as far as it goes when it is MCAP (a recording cut short); an
+    SQLite file cut short cannot be read at all (its page count no longer matches).
     """
+    def wanted(topic: str, msgtype: str) -> bool:
+        return msgtype in kinds or (msgtype == STRING and topic.endswith('/ground_truth'))
+
     try:
         with Reader(path) as reader:
             types = {c.topic: c.msgtype for c in reader.connections}
-            other = sorted(t for t, m in types.items() if m not in (CLOUD, STRING) or
-                           (m == STRING and not t.endswith('/ground_truth')))
+            other = sorted(t for t, m in types.items() if not wanted(t, m) and t not in skip)
             if other:
                 problems.append(f"ignored topics of other types: {', '.join(other)}")
-            wanted = [c for c in reader.connections if c.topic not in other]
             try:
-                for conn, ts, raw in reader.messages(connections=wanted):
+                for conn, ts, raw in reader.messages(connections=[
+                        c for c in reader.connections
+                        if wanted(c.topic, c.msgtype) and c.topic not in skip]):
                     yield conn.topic, conn.msgtype, ts, raw
             except Exception as e:
                 problems.append(f'stopped reading early: {type(e).__name__}: {e}')
@@ -128,7 +135,7 @@ def _messages(path: Path, problems: list[str]):
         n = 0
         for topic, msgtype, ts, raw in salvage(f, problems):
             n += 1
-            if msgtype == CLOUD or (msgtype == STRING and topic.endswith('/ground_truth')):
+            if wanted(topic, msgtype) and topic not in skip:
                 yield topic, msgtype, ts, raw
         problems.append(f'{f.name}: salvaged {n} messages from the damaged file')
 
@@ -139,13 +146,11 @@ def read_bag(path, topics=None, leave=()):
 
     clouds are dicts of topic, timestamp, msg, points (or a format error); truths map (topic,
     sec, nanosec) to ground truth; problems list what could not be read. leave: topics not read
-    at all (a camera's depth clouds, which scene_messages reads one at a time).
+    at all (a camera's depth frames, which scene_messages reads one at a time).
     """
     clouds, truths, problems = [], {}, []
     skipped = {}
-    for topic, msgtype, ts, raw in _messages(Path(path), problems):
-        if topic in leave:
-            continue
+    for topic, msgtype, ts, raw in _messages(Path(path), problems, skip=leave):
         try:
             msg = TYPESTORE.deserialize_cdr(raw, msgtype)
         except Exception as e:  # a damaged message: skip it, keep the rest
@@ -176,15 +181,25 @@ def read_bag(path, topics=None, leave=()):
 
 
 def scene_messages(path, topic: str, problems: list[str]):
-    """Yield the bag's messages on topic one at a time, deserialized (a depth cloud is large)."""
-    found = False
-    for t, msgtype, _, raw in _messages(Path(path), []):
-        if t != topic or msgtype != CLOUD:
+    """
+    Yield (message, CameraInfo) of the bag's depth frames on topic, one at a time (they are large).
+
+    Depth clouds, or depth images each with the last CameraInfo recorded before it on the
+    camera_info topic beside it (None when there was none yet).
+    """
+    info_topic, info, found = camera_info_topic(topic), None, False
+    for t, msgtype, _, raw in _messages(Path(path), [], kinds=(CLOUD, IMAGE, CAMERA_INFO)):
+        if (t, msgtype) not in ((topic, CLOUD), (topic, IMAGE), (info_topic, CAMERA_INFO)):
             continue
-        found = True
         try:
-            yield TYPESTORE.deserialize_cdr(raw, msgtype)
+            msg = TYPESTORE.deserialize_cdr(raw, msgtype)
         except Exception as e:  # a damaged message: skip it, keep the rest
-            problems.append(f'{topic}: unreadable message ({type(e).__name__})')
+            problems.append(f'{t}: unreadable message ({type(e).__name__})')
+            continue
+        if t == info_topic:
+            info = msg
+        else:
+            found = True
+            yield msg, info
     if not found:
-        problems.append(f'no clouds on the scene topic {topic}')
+        problems.append(f'no depth clouds or images on the scene topic {topic}')

@@ -47,7 +47,8 @@ class CloudFormatError(ValueError):
         self.reason = reason
 
 
-def _bytes_of(data) -> np.ndarray:
+def data_bytes(data) -> np.ndarray:
+    """Return a message's data field as uint8, without a copy where it can."""
     try:
         return np.frombuffer(memoryview(data), dtype=np.uint8)
     except TypeError:  # a plain list of ints, as a hand-built message may hold
@@ -88,7 +89,7 @@ def _field_views(msg, names=('x', 'y', 'z')) -> list[np.ndarray]:
             'bad_layout',
             f'row_step {row_step} is less than width {width} x point_step {point_step}',
         )
-    buf = _bytes_of(msg.data)
+    buf = data_bytes(msg.data)
     if len(buf) < row_step * height:
         raise CloudFormatError(
             'truncated_data',
@@ -117,6 +118,11 @@ def pointcloud2_to_xyz(msg, finite_only: bool = True) -> np.ndarray:
     x, y, z = _field_views(msg)
     pts = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1).astype(np.float64)
     return pts[np.isfinite(pts).all(axis=1)] if finite_only else pts
+
+
+def pointcloud2_to_grid(msg) -> np.ndarray:
+    """Read an organized cloud's points as a (height, width, 3) float32 array, holes and all."""
+    return np.stack(_field_views(msg), axis=-1).astype(np.float32, copy=False)
 
 
 def pack_points(points, dtype=np.float32, extra_fields=None) -> tuple[list, int, bytes]:

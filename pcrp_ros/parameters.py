@@ -42,11 +42,17 @@ class NodeSettings(Options):
         ('segmented_object',), 'PointCloud2 topics of segmented objects, one object per '
         'message.', read_only=True)
     scene_topics: tuple = setting(
-        (), "PointCloud2 topics of the camera's whole depth cloud (e.g. /camera/depth/points): "
-        'one shared by every input topic, or one per entry of input_topics, in order; empty: '
-        'none. Each cloud is answered with the depth cloud of its own stamp and frame, so surface '
-        'of the object that something in front of it hid is not counted missing.',
-        read_only=True)
+        (), "Topics of the camera's whole depth frame (e.g. /camera/depth/points; see "
+        'scene_type): one shared by every input topic, or one per entry of input_topics, in '
+        'order; empty: none. Each cloud is answered with the depth frame of its own stamp and '
+        'frame, so surface of the object that something in front of it hid is not counted '
+        'missing.', read_only=True)
+    scene_type: str = setting(
+        'points', 'What scene_topics carry: points (PointCloud2 depth clouds) or depth_image '
+        '(sensor_msgs/Image, rectified, 16UC1 millimetres or 32FC1 metres, with its CameraInfo on '
+        'the camera_info topic beside it, as image_transport pairs them: e.g. '
+        '/camera/depth/image_rect_raw and /camera/depth/camera_info).',
+        choices=('points', 'depth_image'), read_only=True)
     publish_aligned_model: bool = setting(
         True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.")
     sensor_at_origin: bool = setting(

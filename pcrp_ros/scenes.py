@@ -13,11 +13,12 @@
 # limitations under the License.
 
 """
-The camera's whole depth clouds (scenes) the node answers segmented clouds with.
+The camera's whole depth frames (scenes) the node answers segmented clouds with.
 
-A segmenter stamps each object cloud with the stamp of the depth frame it cut it from, so the
-scene of a cloud is the scene message of the same stamp and frame. Scene messages are kept as
-they came, the last SCENE_BUFFER of each topic, and read only when a cloud is matched with one.
+Depth clouds (PointCloud2) or depth images (sensor_msgs/Image, with their CameraInfo). A
+segmenter stamps each object cloud with the stamp of the depth frame it cut it from, so the scene
+of a cloud is the scene message of the same stamp and frame. Scene messages are kept as they
+came, the last SCENE_BUFFER of each topic, and read only when a cloud is matched with one.
 """
 
 from __future__ import annotations
@@ -26,7 +27,9 @@ import collections
 import threading
 
 import numpy as np
-from pcrp_ros.conversions import CloudFormatError, pointcloud2_to_xyz
+from pcrp_core import DepthImage
+from pcrp_ros.conversions import CloudFormatError, pointcloud2_to_grid, pointcloud2_to_xyz
+from pcrp_ros.depth_images import depth_image
 
 # Scene messages kept per topic. A segmented cloud follows its depth frame by the segmenter's
 # latency: four frames is 130 ms at 30 Hz. A cloud takes its match when it is queued, so the
@@ -71,16 +74,27 @@ def same_stamp_as(a, b) -> bool:
     return (a.stamp.sec, a.stamp.nanosec) == (b.stamp.sec, b.stamp.nanosec)
 
 
-def scene_points(msg, frame_id: str) -> np.ndarray:
-    """
-    Read a scene message's finite points, (M, 3) float64.
-
-    CloudFormatError with a reason when it cannot serve a cloud in frame_id: the conversion's
-    own, other_frame, empty or no_finite_points.
-    """
+def in_frame(msg, frame_id: str) -> None:
+    """Raise CloudFormatError other_frame unless the scene message is in frame_id."""
     if msg.header.frame_id != frame_id:
         raise CloudFormatError('other_frame', f'scene in frame {msg.header.frame_id!r}, '
                                               f'the cloud in {frame_id!r}')
+
+
+def read_scene(msg, frame_id: str):
+    """
+    Read a scene message: a DepthImage if it is a pinhole camera's organized cloud, else points.
+
+    The points are the finite ones, (M, 3) float64. A depth image is cut to what is in reach of an
+    object by a slice, where a list of points costs a pass over all of them (depth_image.py).
+    CloudFormatError with a reason when it cannot serve a cloud in frame_id: the conversion's own,
+    other_frame, empty or no_finite_points.
+    """
+    in_frame(msg, frame_id)
+    if msg.height > 1 and msg.width > 1:
+        image = DepthImage.from_organized(pointcloud2_to_grid(msg))
+        if image is not None:
+            return image
     points = pointcloud2_to_xyz(msg, finite_only=False)
     if not len(points):
         raise CloudFormatError('empty', 'scene has no points')
@@ -91,16 +105,38 @@ def scene_points(msg, frame_id: str) -> np.ndarray:
     return finite
 
 
+def read_frame(msg, frame_id: str, camera_info=None):
+    """
+    Read a scene message for a cloud in frame_id: a depth cloud, or a depth image with its camera.
+
+    A depth image (it has an encoding) is read with camera_info, its camera's CameraInfo.
+    CloudFormatError with a reason when it cannot be used.
+    """
+    if not hasattr(msg, 'encoding'):
+        return read_scene(msg, frame_id)
+    in_frame(msg, frame_id)
+    return depth_image(msg, camera_info)
+
+
 class Scenes:
     """
-    The depth clouds each input topic's clouds are answered with, and what of one a cloud uses.
+    The depth frames each input topic's clouds are answered with, and what of one a cloud uses.
 
-    topic_of: input topic -> its scene topic; the messages kept as they came (buffer).
+    topic_of: input topic -> its scene topic; the messages kept as they came (buffer); each scene
+    topic's last CameraInfo, for depth images (camera_info).
     """
 
     def __init__(self, topic_of: dict, size: int = SCENE_BUFFER):
         self.topic_of = dict(topic_of)
         self.buffer = SceneBuffer(size)
+        self.camera_info = {}   # scene topic -> its camera's last CameraInfo
+
+    def on_camera_info(self, scene_topic: str, msg) -> None:
+        self.camera_info[scene_topic] = msg
+
+    def clear(self) -> None:
+        self.buffer.clear()
+        self.camera_info.clear()
 
     def on_arrival(self, topic: str, header):
         """Return the scene message of a cloud arriving on topic, if it has come (kept, unread)."""
@@ -131,12 +167,15 @@ class Scenes:
                 f'none of the last {self.buffer.size} is stamped as the cloud (a segmenter must '
                 'stamp each cloud as the depth cloud it cut it from)')
         try:
-            scene = model.scene_in_reach(points, scene_points(msg, header.frame_id), viewpoint)
+            seen = read_frame(msg, header.frame_id, self.camera_info.get(self.topic_of[topic]))
+            scene = model.scene_in_reach(points, seen, viewpoint)
         except CloudFormatError as e:
             return None, f'rejected_{e.reason}', str(e)
         except Exception as e:   # nothing one message holds may cost the cloud its answer
             return None, 'rejected_internal_error', f'{type(e).__name__}: {e}'
         if scene is None:
             return None, 'unused', None
-        # depth clouds are float32: halves what reaches a worker process, and loses nothing
-        return scene.astype(np.float32), 'used', None
+        if isinstance(scene, np.ndarray):
+            # depth clouds are float32: halves what reaches a worker process, and loses nothing
+            scene = scene.astype(np.float32)
+        return scene, 'used', None

@@ -149,4 +149,40 @@ def test_process_answers_each_cloud_with_the_depth_cloud_of_its_stamp(tmp_path):
     assert rows[0]['confidence'] > rows[1]['confidence'] + 0.2
     assert 'scenes: used 1, missing 1' in summary(rows)
     out = _process_command(bag, tmp_path / 'cli', '--scene-topic', 'nothing/here')
-    assert out.returncode == 0 and 'no clouds on the scene topic nothing/here' in out.stderr
+    assert out.returncode == 0 and 'no depth clouds or images on the scene topic nothing/here' \
+        in out.stderr
+
+
+def test_process_reads_depth_images_with_the_camera_info_recorded_beside_them(tmp_path):
+    from pcrp_core.evaluation.scenes import sample_scene
+    from pcrp_core.sources import load_source
+    from pcrp_ros.bags import BagWriter, cloud_msg, header, T
+
+    cone = next(o for o in load_source('household', split='train') if o.gallery_id == 'cone')
+    view = sample_scene(cone.mesh, 'cone', 14, 1, 'free', occlusion=True, seed=1)
+    image, cam = view.depth_image(), view.camera
+    mm = np.rint(np.where(np.isfinite(image.z), image.z, 0.0) * 1000).astype('<u2')
+
+    def depth(sec):
+        return T['sensor_msgs/msg/Image'](
+            header=header(sec, 0, 'cam'), height=cam.height, width=cam.width, encoding='16UC1',
+            is_bigendian=0, step=cam.width * 2, data=np.frombuffer(mm.tobytes(), np.uint8))
+    info = T['sensor_msgs/msg/CameraInfo'](
+        header=header(2, 0, 'cam'), height=cam.height, width=cam.width,
+        distortion_model='plumb_bob', d=np.zeros(5),
+        k=np.array([cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1.0]), r=np.eye(3).ravel(),
+        p=np.zeros(12), binning_x=0, binning_y=0,
+        roi=T['sensor_msgs/msg/RegionOfInterest'](
+            x_offset=0, y_offset=0, height=0, width=0, do_rectify=False))
+    bag = tmp_path / 'images'
+    with BagWriter(bag) as w:
+        for sec in (1, 2):   # the first image came before any CameraInfo
+            w.write('cam/depth/image', depth(sec), sec * 10**9)
+            if sec == 1:
+                w.write('cam/depth/camera_info', info, sec * 10**9 + 1)
+            w.write('object', cloud_msg(view.points, header(sec, 0, 'cam')), sec * 10**9 + 2)
+    rows = process_bag(bag, tmp_path / 'out', PCRP.load(None), quiet=True,
+                       scene_topic='cam/depth/image')
+    assert [(r['topic'], r['scene']) for r in rows] == [('object', 'missing'), ('object', 'used')]
+    assert rows[0]['gallery_id'] == rows[1]['gallery_id'] == 'cone'
+    assert rows[1]['confidence'] > rows[0]['confidence'] + 0.2

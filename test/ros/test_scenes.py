@@ -22,7 +22,7 @@ surer with the scene than without; every scene that cannot be used leaves the cl
 
 from builtin_interfaces.msg import Time
 import numpy as np
-from pcrp_core import PCRP
+from pcrp_core import DepthImage, PCRP
 from pcrp_ros.conversions import pointcloud2_to_xyz, xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode
 from pcrp_ros.parameters import NodeSettings
@@ -33,7 +33,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 # sets ROS_DOMAIN_ID and the discovery range before any context is made
 from rosutil import ros_context, spinning, wait_for
-from sensor_msgs.msg import PointCloud2
+from sensor_msgs.msg import CameraInfo, Image, PointCloud2
 from std_msgs.msg import Header
 
 OBJECT, DEPTH = 'scene_test/object', 'scene_test/depth'
@@ -152,6 +152,38 @@ def test_a_cloud_is_answered_with_the_scene_of_its_stamp_and_frame(stream, model
     values = {kv.key: kv.value for kv in statuses[f'/pcrp_node: /{OBJECT}'].values}
     assert values['scene_used'] == '1' and values['scene_missing'] == '1'
     assert values['scene_topic'] == f'/{DEPTH}'
+
+
+def _camera_frame(view, header):
+    """
+    Make the depth cloud a camera driver publishes: a pinhole camera's, organized, a wall behind.
+
+    The depth image of the object and its occluder; every other pixel sees the wall.
+    """
+    image = view.depth_image()
+    far = float(view.points[:, 2].max()) + 0.3
+    z = np.where(np.isfinite(image.z), image.z, far)
+    z[::7, ::5] = np.nan                                     # pixels without a depth
+    rows, cols = np.indices(z.shape)
+    (fx, fy), (cx, cy) = image.focal, image.centre
+    grid = np.stack([(cols - cx) / fx * z, (rows - cy) / fy * z, z], axis=-1)
+    msg = xyz_to_pointcloud2(grid.reshape(-1, 3).astype(np.float32), header)
+    msg.height, msg.width, msg.row_step = z.shape[0], z.shape[1], z.shape[1] * msg.point_step
+    return msg
+
+
+def test_a_cameras_depth_cloud_is_read_and_cut_as_the_image_it_is(stream, model, view):
+    _, without = stream.send(view.points, 20)
+    before = stream.scene_counts().get('scene_used', 0)
+    depth = _camera_frame(view, _header(21))
+    given, answer = stream.send(view.points, 21, depth)
+    assert stream.scene_counts()['scene_used'] == before + 1
+    assert isinstance(given, DepthImage)
+    np.testing.assert_allclose(given.focal, view.camera.fx, rtol=1e-5)
+    # cut to the object's reach: at most the image, fewer pixels than the camera has
+    assert 0 < given.z.size < depth.width * depth.height
+    assert answer.gallery_id == 'cone'
+    assert answer.confidence > without.confidence + 0.2, (answer.confidence, without.confidence)
 
 
 def _without_z(msg):
@@ -298,3 +330,69 @@ def test_worker_processes_are_sent_the_cropped_scene_and_use_it(model, view, mon
     without = model.estimate(screened, viewpoint=np.zeros(3)).confidence
     assert abs(confidence - with_scene) < 0.02 < abs(confidence - without), \
         (confidence, with_scene, without)
+
+
+def _depth_image(view, header, encoding='16UC1'):
+    """Make the depth image a camera driver publishes (millimetres), a wall behind the object."""
+    image = view.depth_image()
+    far = float(view.points[:, 2].max()) + 0.3
+    mm = np.rint(np.where(np.isfinite(image.z), image.z, far) * 1000).astype('<u2')
+    mm[::7, ::5] = 0                                         # pixels without a depth
+    rows, cols = mm.shape
+    return Image(header=header, height=rows, width=cols, encoding=encoding, is_bigendian=0,
+                 step=cols * 2, data=mm.tobytes())
+
+
+def _camera_info(view, header):
+    cam = view.camera
+    return CameraInfo(header=header, width=cam.width, height=cam.height,
+                      k=[cam.fx, 0.0, cam.cx, 0.0, cam.fy, cam.cy, 0.0, 0.0, 1.0])
+
+
+def test_depth_images_are_answered_with_their_camera_info_and_bad_ones_counted(view):
+    topic, depth_topic = 'scene_images/object', 'scene_images/depth/image_rect_raw'
+    model, given = PCRP.load(None), []
+    estimate = model.estimate
+
+    def recorded(points, **kwargs):
+        given.append(kwargs.get('scene'))
+        return estimate(points, **kwargs)
+    model.estimate = recorded
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=[
+            Parameter('input_topics', value=[topic]),
+            Parameter('scene_topics', value=[depth_topic]),
+            Parameter('scene_type', value='depth_image'),
+            Parameter('qos_reliability', value='reliable'),
+            Parameter('min_confidence', value=0.0)])
+        client = rclpy.create_node('scene_images_client', context=ctx)
+        objects = client.create_publisher(PointCloud2, f'/{topic}', RELIABLE)
+        images = client.create_publisher(Image, f'/{depth_topic}', RELIABLE)
+        infos = client.create_publisher(CameraInfo, '/scene_images/depth/camera_info', RELIABLE)
+        stats, scenes = node.stats[topic], node.answerer._scenes
+
+        def send(sec, image, info=None):
+            if info is not None:
+                infos.publish(info)
+                assert wait_for(lambda: scenes.camera_info, 10)
+            images.publish(image)
+            assert wait_for(lambda: scenes.buffer.find(depth_topic, image.header), 10)
+            before = stats.counts['answered']
+            objects.publish(xyz_to_pointcloud2(view.points, _header(sec)))
+            assert wait_for(lambda: stats.counts['answered'] > before, 60), dict(stats.counts)
+            return given[-1], stats.confidence[-1]
+
+        with spinning(ctx, node, client):
+            assert wait_for(lambda: objects.get_subscription_count()
+                            and images.get_subscription_count()
+                            and infos.get_subscription_count(), 10)
+            # no CameraInfo yet: answered without the image, and counted
+            scene, without = send(1, _depth_image(view, _header(1)))
+            assert scene is None and stats.snapshot()['scene_rejected_no_camera_info'] == 1
+            info = _camera_info(view, _header(2))
+            scene, _ = send(2, _depth_image(view, _header(2), 'rgb8'), info)
+            assert scene is None and stats.snapshot()['scene_rejected_bad_encoding'] == 1
+            scene, confidence = send(3, _depth_image(view, _header(3)))
+            assert isinstance(scene, DepthImage) and stats.snapshot()['scene_used'] == 1
+            np.testing.assert_allclose(scene.focal, view.camera.fx)
+            assert confidence > without + 0.2, (confidence, without)

@@ -1,0 +1,77 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A depth camera's depth image (sensor_msgs/Image) and its CameraInfo, read as a DepthImage.
+
+What depth drivers publish by default (/camera/depth/image_rect_raw: 16UC1 millimetres, or 32FC1
+metres, with camera_info beside it); a point cloud of the same frame is often switched off and
+is four to eight times the bytes. Works on rclpy and rosbags messages alike (only field names are
+read). Anything unreadable raises CloudFormatError with a reason: bad_encoding, bad_layout,
+truncated_data, no_camera_info, camera_info_mismatch.
+"""
+from __future__ import annotations
+
+import numpy as np
+from pcrp_core import DepthImage
+from pcrp_ros.conversions import CloudFormatError, data_bytes
+
+# encoding -> (numpy type, metres per unit); zero means no measurement in either
+ENCODINGS = {'16UC1': ('u2', 0.001), 'mono16': ('u2', 0.001), '32FC1': ('f4', 1.0)}
+
+
+def camera_info_topic(image_topic: str) -> str:
+    """Return the CameraInfo topic beside an image topic, as image_transport pairs them."""
+    namespace, _, _ = image_topic.rpartition('/')
+    return f'{namespace}/camera_info' if namespace else 'camera_info'
+
+
+def depth_metres(msg) -> np.ndarray:
+    """Return a depth image's depth in metres, (height, width) float32, inf where none."""
+    if msg.encoding not in ENCODINGS:
+        raise CloudFormatError('bad_encoding', f'depth image encoded {msg.encoding!r}; expected '
+                                               f"one of {', '.join(ENCODINGS)}")
+    code, scale = ENCODINGS[msg.encoding]
+    dtype = np.dtype(('>' if msg.is_bigendian else '<') + code)
+    height, width, step = int(msg.height), int(msg.width), int(msg.step)
+    if step < width * dtype.itemsize:
+        raise CloudFormatError('bad_layout', f'step {step} is less than width {width} x '
+                                             f'{dtype.itemsize} bytes')
+    buf = data_bytes(msg.data)
+    if len(buf) < step * height:
+        raise CloudFormatError('truncated_data', f'data has {len(buf)} bytes, step {step} x '
+                                                 f'height {height} needs {step * height}')
+    raw = np.ndarray((height, width), dtype=dtype, buffer=buf, strides=(step, dtype.itemsize))
+    z = raw.astype(np.float32) * np.float32(scale)
+    with np.errstate(invalid='ignore'):
+        z[~(z > 0) | ~np.isfinite(z)] = np.inf
+    return z
+
+
+def depth_image(msg, info) -> DepthImage:
+    """Return the DepthImage of a depth image msg taken with the camera info describes."""
+    if info is None:
+        raise CloudFormatError('no_camera_info', 'no CameraInfo has come for this depth image')
+    if info.header.frame_id != msg.header.frame_id:
+        raise CloudFormatError('camera_info_mismatch', f'CameraInfo in frame '
+                                                       f'{info.header.frame_id!r}, the image in '
+                                                       f'{msg.header.frame_id!r}')
+    if (int(info.width), int(info.height)) not in ((0, 0), (int(msg.width), int(msg.height))):
+        raise CloudFormatError('camera_info_mismatch', f'CameraInfo of {info.width} x '
+                                                       f'{info.height}, the image {msg.width} x '
+                                                       f'{msg.height}')
+    k = np.asarray(info.k, dtype=np.float64).reshape(-1)
+    if len(k) != 9 or not (k[0] > 0 and k[4] > 0):
+        raise CloudFormatError('camera_info_mismatch', 'CameraInfo K has no focal lengths')
+    return DepthImage(depth_metres(msg), np.array([k[0], k[4]]), np.array([k[2], k[5]]))

@@ -1,0 +1,76 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Depth images and their CameraInfo read as DepthImages (pcrp_ros/depth_images.py)."""
+import numpy as np
+from pcrp_ros.conversions import CloudFormatError
+from pcrp_ros.depth_images import camera_info_topic, depth_image, depth_metres
+import pytest
+from sensor_msgs.msg import CameraInfo, Image
+from std_msgs.msg import Header
+
+DEPTH_MM = np.array([[0, 500, 1000], [1500, 65535, 250]], dtype=np.uint16)
+
+
+def _image(values: np.ndarray, encoding: str, big_endian=False, pad: int = 0, frame='cam'):
+    raw = values.astype(values.dtype.newbyteorder('>' if big_endian else '<'))
+    rows = [r.tobytes() + bytes(pad) for r in raw]
+    return Image(header=Header(frame_id=frame), height=raw.shape[0], width=raw.shape[1],
+                 encoding=encoding, is_bigendian=int(big_endian),
+                 step=raw.shape[1] * raw.itemsize + pad, data=b''.join(rows))
+
+
+def _info(frame='cam', size=(3, 2), k=(600.0, 0.0, 1.0, 0.0, 610.0, 0.5, 0.0, 0.0, 1.0)):
+    return CameraInfo(header=Header(frame_id=frame), width=size[0], height=size[1], k=list(k))
+
+
+@pytest.mark.parametrize('big_endian', [False, True])
+@pytest.mark.parametrize('pad', [0, 6])
+def test_millimetres_and_metres_read_as_metres_with_no_depth_as_inf(big_endian, pad):
+    expected = np.where(DEPTH_MM > 0, DEPTH_MM / 1000.0, np.inf)
+    mm = depth_metres(_image(DEPTH_MM, '16UC1', big_endian, pad))
+    np.testing.assert_allclose(mm, expected, rtol=1e-6)
+    metres = DEPTH_MM / 1000.0
+    metres[0, 0] = np.nan
+    np.testing.assert_allclose(
+        depth_metres(_image(metres.astype(np.float32), '32FC1', big_endian, pad)), expected,
+        rtol=1e-6)
+
+
+@pytest.mark.parametrize('msg, reason', [
+    (_image(DEPTH_MM.astype(np.uint8), 'rgb8'), 'bad_encoding'),
+    (Image(height=2, width=3, encoding='16UC1', step=4, data=bytes(8)), 'bad_layout'),
+    (Image(height=2, width=3, encoding='16UC1', step=6, data=bytes(10)), 'truncated_data'),
+])
+def test_unreadable_depth_images_say_why(msg, reason):
+    with pytest.raises(CloudFormatError) as e:
+        depth_metres(msg)
+    assert e.value.reason == reason
+
+
+def test_the_camera_info_gives_the_intrinsics_and_must_fit_the_image():
+    image = depth_image(_image(DEPTH_MM, '16UC1'), _info())
+    np.testing.assert_allclose(image.focal, [600.0, 610.0])
+    np.testing.assert_allclose(image.centre, [1.0, 0.5])
+    for info, reason in [(None, 'no_camera_info'), (_info(frame='other'), 'camera_info_mismatch'),
+                         (_info(size=(6, 4)), 'camera_info_mismatch'),
+                         (_info(k=[0.0] * 9), 'camera_info_mismatch')]:
+        with pytest.raises(CloudFormatError) as e:
+            depth_image(_image(DEPTH_MM, '16UC1'), info)
+        assert e.value.reason == reason
+
+
+def test_camera_info_sits_beside_its_image():
+    assert camera_info_topic('/camera/depth/image_rect_raw') == '/camera/depth/camera_info'
+    assert camera_info_topic('depth') == 'camera_info'
