@@ -41,6 +41,15 @@ class DepthImage:
     focal: np.ndarray      # (2,) fx, fy in pixels
     centre: np.ndarray     # (2,) cx, cy: where the optical axis meets the image, in pixels
 
+    def __post_init__(self):
+        # drivers and users mark "no depth" with 0 or NaN as often as with inf; all of them
+        # must hide nothing, where a 0 taken as a depth would hide everything behind it
+        z = np.asarray(self.z, dtype=np.float32)
+        with np.errstate(invalid='ignore'):
+            self.z = np.where(z > 0, z, np.float32(np.inf))
+        self.focal = np.asarray(self.focal, dtype=np.float64).reshape(2)
+        self.centre = np.asarray(self.centre, dtype=np.float64).reshape(2)
+
     @classmethod
     def from_organized(cls, points: np.ndarray) -> DepthImage | None:
         """

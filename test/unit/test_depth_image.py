@@ -85,3 +85,16 @@ def test_an_image_seen_from_elsewhere_than_its_camera_becomes_points():
     assert seen_from(image, np.zeros(3)) is image
     moved = seen_from(image, np.array([0.1, 0.0, 0.0]))
     np.testing.assert_allclose(moved, image.points() - [0.1, 0.0, 0.0])
+
+
+def test_zero_and_nan_depths_are_nothing_measured_and_hide_nothing():
+    z = np.full((48, 64), 0.5, dtype=np.float32)
+    z[:, :32] = 0.0
+    z[:10] = np.nan
+    image = DepthImage(z, [60.0, 60.0], [31.5, 23.5])
+    assert np.isinf(image.z[:, :32]).all() and np.isinf(image.z[:10]).all()
+    assert len(image.points()) == 38 * 32
+    cloud = np.array([[0.05, 0.05, 0.8], [0.06, 0.05, 0.8]])           # right half, behind 0.5
+    behind_zeros = np.array([[-0.2, 0.1, 0.9]])
+    occ = occluders(image, cloud, 0.01, 0.3)
+    assert not hidden(behind_zeros, occ, 0.003).any()
