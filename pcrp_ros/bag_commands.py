@@ -195,14 +195,16 @@ def _make_bag(a) -> int:
 
 
 # -- process --------------------------------------------------------------------------------------
-def bag_scenes(bag, topic: str, clouds: list, model, viewpoint, problems: list) -> dict:
+def bag_scenes(bag, topic: str, clouds: list, model, viewpoint,
+               problems: list) -> tuple[dict, dict]:
     """
-    Return {index of a cloud: the part of its scene in reach}, as the node's scene_topics match.
+    Return ({cloud index: the part of its scene in reach}, {cloud index: rejected_<reason>}).
 
-    The scene of a cloud is the message on topic with its stamp and frame (pcrp_ros/scenes.py):
-    a depth cloud, or a depth image read with the CameraInfo recorded beside it. They are read
-    one at a time, and only what is in reach of a cloud is kept. None for a cloud the model would
-    use no scene for (not answered view by view).
+    As the node's scene_topics match: the scene of a cloud is the message on topic with its stamp
+    and frame (pcrp_ros/scenes.py), a depth cloud or a depth image read with the CameraInfo
+    recorded beside it. They are read one at a time, and only what is in reach of a cloud is
+    kept: None for a cloud the model would use no scene for (not answered view by view). A scene
+    that cannot be used is counted by its reason, as the node counts it.
     """
     from pcrp_ros.bags import scene_messages
     from pcrp_ros.conversions import CloudFormatError
@@ -213,20 +215,23 @@ def bag_scenes(bag, topic: str, clouds: list, model, viewpoint, problems: list) 
         if c['error'] is None:
             h = c['msg'].header
             waiting.setdefault((h.stamp.sec, h.stamp.nanosec, h.frame_id), []).append(k)
-    found = {}
+    found, rejected = {}, {}
     for msg, camera_info in scene_messages(bag, topic, problems):
         h = msg.header
         key = (h.stamp.sec, h.stamp.nanosec, h.frame_id)
         if key not in waiting:
             continue
+        clouds_of_frame = waiting.pop(key)
         try:
             scene = read_frame(msg, h.frame_id, camera_info)
-            for k in waiting.pop(key):
+            for k in clouds_of_frame:
                 found[k] = model.scene_in_reach(clouds[k]['points'], scene, viewpoint)
         except Exception as e:  # as in the node: the clouds are answered without it
+            reason = e.reason if isinstance(e, CloudFormatError) else 'internal_error'
+            rejected.update({k: f'rejected_{reason}' for k in clouds_of_frame if k not in found})
             problems.append(f'{topic} @ {h.stamp.sec}.{h.stamp.nanosec:09d}: scene not used: '
                             f'{e if isinstance(e, CloudFormatError) else type(e).__name__}')
-    return found
+    return found, rejected
 
 
 def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None, up=None,
@@ -238,7 +243,7 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
     their reason, never a stop. up: which way is up in the clouds' frame, as the node's
     up_vector (None: unknown). scene_topic: the camera's depth clouds or depth images, each cloud
     answered with the one of its stamp and frame (the node's scene_topics); rows then say whether
-    one was (scene: used, missing or unused).
+    one was (scene: used, missing, unused or rejected_<reason>, as the node counts them).
     """
     from pcrp_core import InvalidCloud
     from pcrp_ros.bags import BagWriter, cloud_msg, pose_msg, read_bag, T
@@ -248,8 +253,8 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
     viewpoint = np.zeros(3) if sensor_at_origin else None
     leave = (scene_topic, camera_info_topic(scene_topic)) if scene_topic else ()
     clouds, truths, problems = read_bag(bag, topics, leave=leave)
-    scenes = (bag_scenes(bag, scene_topic, clouds, model, viewpoint, problems)
-              if scene_topic else {})
+    scenes, unusable = (bag_scenes(bag, scene_topic, clouds, model, viewpoint, problems)
+                        if scene_topic else ({}, {}))
     for p in problems:
         print(f'pcrp: {bag}: {p}', file=sys.stderr)
     rows = []
@@ -258,8 +263,8 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
             hdr = c['msg'].header
             row = {'topic': c['topic'], 'stamp': f'{hdr.stamp.sec}.{hdr.stamp.nanosec:09d}'}
             if scene_topic:
-                row['scene'] = ('missing' if k not in scenes
-                                else 'unused' if scenes[k] is None else 'used')
+                row['scene'] = unusable.get(k) or ('missing' if k not in scenes else
+                                                   'unused' if scenes[k] is None else 'used')
             gt = truths.get((c['topic'], hdr.stamp.sec, hdr.stamp.nanosec))
             if c['error'] is not None:
                 row.update(status=f"rejected: {c['error'].reason}")
@@ -333,8 +338,8 @@ def summary(rows) -> str:
     lines += [f'  {k}: {v}' for k, v in sorted(reasons.items())]
     scenes = [r['scene'] for r in rows if 'scene' in r]
     if scenes:
-        lines.append('scenes: ' + ', '.join(f'{k} {scenes.count(k)}'
-                                            for k in ('used', 'missing', 'unused')
+        kinds = ['used', 'missing', 'unused'] + sorted(set(scenes) - {'used', 'missing', 'unused'})
+        lines.append('scenes: ' + ', '.join(f'{k} {scenes.count(k)}' for k in kinds
                                             if k in scenes))
     lat = [r['latency_ms'] for r in rows if 'latency_ms' in r]
     if lat:

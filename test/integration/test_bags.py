@@ -183,6 +183,8 @@ def test_process_reads_depth_images_with_the_camera_info_recorded_beside_them(tm
             w.write('object', cloud_msg(view.points, header(sec, 0, 'cam')), sec * 10**9 + 2)
     rows = process_bag(bag, tmp_path / 'out', PCRP.load(None), quiet=True,
                        scene_topic='cam/depth/image')
-    assert [(r['topic'], r['scene']) for r in rows] == [('object', 'missing'), ('object', 'used')]
+    assert [(r['topic'], r['scene']) for r in rows] == [
+        ('object', 'rejected_no_camera_info'), ('object', 'used')]
+    assert 'scenes: used 1, rejected_no_camera_info 1' in summary(rows)
     assert rows[0]['gallery_id'] == rows[1]['gallery_id'] == 'cone'
     assert rows[1]['confidence'] > rows[0]['confidence'] + 0.2
