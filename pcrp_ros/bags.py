@@ -140,6 +140,17 @@ def _messages(path: Path, problems: list[str], kinds=(CLOUD,), skip=()):
         problems.append(f'{f.name}: salvaged {n} messages from the damaged file')
 
 
+def _decoded(messages, problems: list[str]):
+    """Yield (topic, msgtype, timestamp, message) of raw ones; a damaged one is noted, skipped."""
+    for topic, msgtype, ts, raw in messages:
+        try:
+            msg = TYPESTORE.deserialize_cdr(raw, msgtype)
+        except Exception as e:  # a damaged message: skip it, keep the rest
+            problems.append(f'{topic} @ {ts}: unreadable message ({type(e).__name__})')
+            continue
+        yield topic, msgtype, ts, msg
+
+
 def read_bag(path, topics=None, leave=()):
     """
     Read (clouds, truths, problems) from a bag; a damaged bag yields what could be read.
@@ -150,12 +161,8 @@ def read_bag(path, topics=None, leave=()):
     """
     clouds, truths, problems = [], {}, []
     skipped = {}
-    for topic, msgtype, ts, raw in _messages(Path(path), problems, skip=leave):
-        try:
-            msg = TYPESTORE.deserialize_cdr(raw, msgtype)
-        except Exception as e:  # a damaged message: skip it, keep the rest
-            problems.append(f'{topic} @ {ts}: unreadable message ({type(e).__name__})')
-            continue
+    for topic, msgtype, ts, msg in _decoded(_messages(Path(path), problems, skip=leave),
+                                            problems):
         if msgtype == STRING:
             gt = json.loads(msg.data)
             truths[(topic[: -len('/ground_truth')], *gt['stamp'])] = gt
@@ -188,14 +195,10 @@ def scene_messages(path, topic: str, problems: list[str]):
     camera_info topic beside it (None when there was none yet).
     """
     info_topic, info, found = camera_info_topic(topic), None, False
-    for t, msgtype, _, raw in _messages(Path(path), [], kinds=(CLOUD, IMAGE, CAMERA_INFO)):
-        if (t, msgtype) not in ((topic, CLOUD), (topic, IMAGE), (info_topic, CAMERA_INFO)):
-            continue
-        try:
-            msg = TYPESTORE.deserialize_cdr(raw, msgtype)
-        except Exception as e:  # a damaged message: skip it, keep the rest
-            problems.append(f'{t}: unreadable message ({type(e).__name__})')
-            continue
+    wanted = ((topic, CLOUD), (topic, IMAGE), (info_topic, CAMERA_INFO))
+    frames = (m for m in _messages(Path(path), [], kinds=(CLOUD, IMAGE, CAMERA_INFO))
+              if m[:2] in wanted)   # only these are worth deserializing
+    for t, _, _, msg in _decoded(frames, problems):
         if t == info_topic:
             info = msg
         else:
