@@ -207,8 +207,7 @@ def bag_scenes(bag, topic: str, clouds: list, model, viewpoint,
     that cannot be used is counted by its reason, as the node counts it.
     """
     from pcrp_ros.bags import scene_messages
-    from pcrp_ros.conversions import CloudFormatError
-    from pcrp_ros.scenes import read_frame
+    from pcrp_ros.scenes import read_frame, unusable
 
     waiting = {}
     for k, c in enumerate(clouds):
@@ -227,10 +226,10 @@ def bag_scenes(bag, topic: str, clouds: list, model, viewpoint,
             for k in clouds_of_frame:
                 found[k] = model.scene_in_reach(clouds[k]['points'], scene, viewpoint)
         except Exception as e:  # as in the node: the clouds are answered without it
-            reason = e.reason if isinstance(e, CloudFormatError) else 'internal_error'
-            rejected.update({k: f'rejected_{reason}' for k in clouds_of_frame if k not in found})
+            outcome, why = unusable(e)
+            rejected.update({k: outcome for k in clouds_of_frame if k not in found})
             problems.append(f'{topic} @ {h.stamp.sec}.{h.stamp.nanosec:09d}: scene not used: '
-                            f'{e if isinstance(e, CloudFormatError) else type(e).__name__}')
+                            f'{why}')
     return found, rejected
 
 

@@ -118,6 +118,13 @@ def read_frame(msg, frame_id: str, camera_info=None):
     return depth_image(msg, camera_info)
 
 
+def unusable(e: Exception) -> tuple[str, str]:
+    """Return (outcome, why) of a scene that raised e: rejected_<reason> as counted, and why."""
+    if isinstance(e, CloudFormatError):
+        return f'rejected_{e.reason}', str(e)
+    return 'rejected_internal_error', f'{type(e).__name__}: {e}'
+
+
 class Scenes:
     """
     The depth frames each input topic's clouds are answered with, and what of one a cloud uses.
@@ -169,10 +176,9 @@ class Scenes:
         try:
             seen = read_frame(msg, header.frame_id, self.camera_info.get(self.topic_of[topic]))
             scene = model.scene_in_reach(points, seen, viewpoint)
-        except CloudFormatError as e:
-            return None, f'rejected_{e.reason}', str(e)
         except Exception as e:   # nothing one message holds may cost the cloud its answer
-            return None, 'rejected_internal_error', f'{type(e).__name__}: {e}'
+            outcome, why = unusable(e)
+            return None, outcome, why
         if scene is None:
             return None, 'unused', None
         if isinstance(scene, np.ndarray):
