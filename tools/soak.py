@@ -43,6 +43,7 @@ SCENE_TOPIC = 'pcrp_soak/depth'
 # a segmenter publishes a frame's objects after its depth cloud, by at least this much: a 3.7 MB
 # depth cloud published back to back with its objects can arrive after them
 SEGMENTER_SECONDS = 0.03
+FOCAL_PX = 600.0    # the depth frames' camera, in pixels
 # Fast DDS reads the file this variable names when a process creates its first participant
 PROFILE_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
 LARGE_CLOUDS_PROFILE = Path(__file__).resolve().parents[1] / 'config' / 'fastdds_large_clouds.xml'
@@ -196,20 +197,26 @@ def camera_clouds(n: int, bag=None) -> list[GoodCloud]:
     return out
 
 
+def _table_depth(goods: list[GoodCloud]) -> float:
+    """Return the depth of a table 5 cm behind the farthest object."""
+    return max(float(g.points[:, 2].max()) for g in goods) + 0.05
+
+
 def depth_cloud(goods: list[GoodCloud], width: int = 640, height: int = 480):
     """
     Make a camera's whole depth cloud, organized, without a stamp: a table just behind the objects.
 
-    Every pixel of a 640 x 480 camera (f = 600) measures a plane 5 cm behind the farthest object,
-    so the whole of it lies in reach of every answer: the most the node reads and cuts per cloud.
+    Every pixel of a 640 x 480 camera (f = FOCAL_PX) measures a plane 5 cm behind the farthest
+    object, so the whole of it lies in reach of every answer: the most the node reads and cuts per
+    cloud.
     """
     from pcrp_ros.conversions import xyz_to_pointcloud2
     from std_msgs.msg import Header
 
-    far = max(float(g.points[:, 2].max()) for g in goods) + 0.05
     v, u = np.mgrid[0:height, 0:width]
-    rays = np.stack([(u - width / 2) / 600.0, (v - height / 2) / 600.0, np.ones(u.shape)], -1)
-    msg = xyz_to_pointcloud2(rays.reshape(-1, 3) * far, Header())
+    rays = np.stack([(u - width / 2) / FOCAL_PX, (v - height / 2) / FOCAL_PX, np.ones(u.shape)],
+                    -1)
+    msg = xyz_to_pointcloud2(rays.reshape(-1, 3) * _table_depth(goods), Header())
     msg.height, msg.width, msg.row_step = height, width, width * msg.point_step
     return msg
 
@@ -222,11 +229,11 @@ def depth_image(goods: list[GoodCloud], width: int = 640, height: int = 480):
     """
     from sensor_msgs.msg import CameraInfo, Image
 
-    far_mm = round(1000 * (max(float(g.points[:, 2].max()) for g in goods) + 0.05))
+    far_mm = round(1000 * _table_depth(goods))
     image = Image(height=height, width=width, encoding='16UC1', is_bigendian=0, step=2 * width,
                   data=np.full((height, width), far_mm, '<u2').tobytes())
     info = CameraInfo(height=height, width=width,
-                      k=[600.0, 0.0, width / 2, 0.0, 600.0, height / 2, 0.0, 0.0, 1.0])
+                      k=[FOCAL_PX, 0.0, width / 2, 0.0, FOCAL_PX, height / 2, 0.0, 0.0, 1.0])
     return image, info
 
 
