@@ -19,7 +19,7 @@ Not from numbers written into its prose.
 """
 
 import pytest
-from tools.bench import _scale_growth, TARGETS, verdicts, why_unmet
+from tools.bench import _scale_growth, _scene_note, TARGETS, verdicts, why_unmet
 from tools.bench_plots import GROWTH_PLOT, growth_plot, growth_series, slope
 
 
@@ -67,7 +67,7 @@ def test_no_reason_for_a_met_target():
 
 def _node_row(topics, workers, age_p95, dropped, lost=0):
     return {'topics': topics, 'workers': workers, 'age_p95_ms': age_p95, 'dropped': dropped,
-            'sent': 600, 'received': 600 - lost}
+            'sent': 600, 'received': 600 - lost, 'rate_hz': 10.0 if topics == 1 else 2.0}
 
 
 def test_the_shipped_node_is_judged_with_a_worker_per_core_and_both_are_shown():
@@ -79,6 +79,28 @@ def test_the_shipped_node_is_judged_with_a_worker_per_core_and_both_are_shown():
     for spoilt in (_node_row(4, 2, 260, 0), _node_row(4, 2, 210, 1), _node_row(4, 2, 210, 0, 3)):
         assert not verdicts({'node_shipped': one + two[:1] + [spoilt]})[TARGETS[4][0]][1]
     assert not verdicts({'node_shipped': one})[TARGETS[4][0]][1]
+
+
+def test_runs_with_a_scene_are_judged_apart_from_those_without(tmp_path):
+    plain = [_node_row(1, 2, 160, 0), _node_row(4, 2, 210, 0)]
+    scened = [dict(_node_row(1, 2, 240, 0), scene='depth_image', scene_used=590,
+                   scene_missing=10),
+              dict(_node_row(4, 2, 270, 0), scene='depth_image', scene_used=600,
+                   scene_missing=0)]
+    run = {'node_shipped': plain + scened}
+    run['verdicts'] = verdicts(run)
+    assert run['verdicts'][TARGETS[4][0]][1] and not run['verdicts'][TARGETS[5][0]][1]
+    assert '270 ms' in run['verdicts'][TARGETS[5][0]][0]
+    assert '270 ms' not in run['verdicts'][TARGETS[4][0]][0]
+    assert '270 ms at 4 x 2 Hz' in ' '.join(why_unmet(run))
+    for r in run['node_shipped']:
+        r.update(results_per_s=9.0, age_p50_ms=100.0, rss_start_mb=1, rss_end_mb=1)
+    text = '\n'.join(_scene_note(run['node_shipped']))
+    assert '1190 of the 1200 clouds' in text
+    scened[1]['age_p95_ms'] = 230
+    run['verdicts'] = verdicts(run)
+    assert run['verdicts'][TARGETS[5][0]][1]
+    assert TARGETS[5][0] not in verdicts({'node_shipped': plain})
 
 
 def test_a_missed_shipped_node_target_is_explained_with_the_views_own_times():
