@@ -252,6 +252,11 @@ class CloudAnswerer:
     def active(self) -> bool:
         return self._running
 
+    @property
+    def scenes(self) -> Scenes:
+        """Return the scene messages and CameraInfo held (to look at, not to change)."""
+        return self._scenes
+
     def _close_retired(self) -> None:
         with self._cv:
             retired, self._retired = self._retired, []

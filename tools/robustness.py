@@ -180,6 +180,28 @@ def run_cases(model) -> list[tuple]:
     return rows
 
 
+def run_scene_cases(model) -> list[tuple]:
+    from pcrp_ros.node import PcrpNode
+    from pcrp_ros.spinning import ros_context, spinning
+    import rclpy
+    from tools.bad_scenes import accepted, camera_frame, CASES, node_parameters, SceneCaseRunner
+
+    rows = []
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=node_parameters())
+        client = rclpy.create_node('pcrp_scene_robustness', context=ctx)
+        runner = SceneCaseRunner(node, client, camera_frame(model))
+        with spinning(ctx, node, client):
+            if not runner.ready():
+                raise RuntimeError('the node did not subscribe its scene topics within 30 s')
+            for case in CASES:   # in order: the first needs a node that has had no CameraInfo
+                out = runner.run(case)
+                rows.append((case, out, accepted(case, out)))
+                print(f'  {case.name:18s} {out.counted:32s} cloud {out.cloud}, '
+                      f'next good frame: {out.next_good}', flush=True)
+    return rows
+
+
 def run_faults(model_dir: Path, work: Path) -> list[tuple]:
     from tools.faults import FAULTS, handled, try_fault
 
@@ -230,7 +252,41 @@ def _stale_share(soak: dict) -> float:
     return sum(d['dropped_stale'] for d in topics) / good if good else 0.0
 
 
-def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: str) -> Path:
+def _scene_section(scene_cases) -> list[str]:
+    from tools.bad_scenes import IMAGE_TOPIC, VIEW_OBJECT
+    lines = [
+        '## Bad depth images, sent as the scene of a good cloud',
+        '',
+        f'The node with `scene_topics: [{IMAGE_TOPIC}]` and `scene_type: depth_image` (the '
+        "camera's depth images as scenes, docs/node.md). Each depth image below is built from one "
+        f"640 x 480 frame of the shipped gallery's {VIEW_OBJECT} in front of a wall and "
+        'published, with the CameraInfo shown (else the last one stands), before the segmented '
+        'cloud of the same stamp. The cloud must be answered, with the frame or without it, and '
+        'the frame counted once under the count shown (`scene_*` in `/diagnostics`, logged once '
+        'per reason per `log_throttle_sec`). After each, the good frame and its CameraInfo are '
+        'sent again with their cloud: the frame must be used and the cloud answered. In this '
+        'order: the first case needs a node that has had no CameraInfo.',
+        '',
+        '| case | what was sent | counted | what the node did | cloud | decided after '
+        '| next good frame | verdict |',
+        '|---|---|---|---|---|---|---|---|',
+    ]
+    for case, out, ok in scene_cases:
+        lines.append(
+            f'| `{case.name}` | {case.what} | {case.counted} | {out.counted} | {out.cloud} '
+            f"| {out.seconds:.2f} s | {out.next_good} | {'pass' if ok else 'FAIL'} |"
+        )
+    return lines + [
+        '',
+        'An image with nothing measured in it (0, NaN or negative depths) is a usable frame '
+        'that hides nothing; one whose CameraInfo does not fit it (another size, no focal '
+        "lengths, another camera's frame) is refused rather than read with the wrong camera.",
+        '',
+    ]
+
+
+def write_report(out_dir: Path, cases, scene_cases, faults, bags, soak, work: Path,
+                 command: str) -> Path:
     from tools import soak as soak_mod
     out_dir.mkdir(parents=True, exist_ok=True)
     lines = [
@@ -241,9 +297,10 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
         f"Made {time.strftime('%Y-%m-%d')} on {platform.machine()}, "
         f'Python {platform.python_version()}. '
         'Every row below was produced by running the real thing, and the same catalogues '
-        '(`tools/bad_clouds.py`, `tools/faults.py`, `tools/robustness.py`) are run by the test '
-        'suite (`test/ros/test_node_robustness.py`, `test/integration/test_bags.py`), so each row '
-        'is also a passing test.',
+        '(`tools/bad_clouds.py`, `tools/bad_scenes.py`, `tools/faults.py`, '
+        '`tools/robustness.py`) are run by the test suite (`test/ros/test_node_robustness.py`, '
+        '`test/ros/test_scene_robustness.py`, `test/integration/test_bags.py`), so each row is '
+        'also a passing test.',
         '',
         '## Bad clouds, sent to the running node over DDS',
         '',
@@ -272,6 +329,9 @@ def write_report(out_dir: Path, cases, faults, bags, soak, work: Path, command: 
         '(`test_a_cloud_in_millimetres_is_answered_or_rejected_not_crashed`). A sphere, a cube '
         'or a plane has no orientation to find; the node may answer or refuse them, never crash.',
         '',
+    ]
+    lines += _scene_section(scene_cases)
+    lines += [
         '## Broken model files, at start-up',
         '',
         'A damaged copy of the shipped model is handed to the node '
@@ -416,6 +476,8 @@ def _run(args) -> int:
     work = Path(tempfile.mkdtemp(prefix='pcrp_robustness_'))
     print('bad clouds, through the node over DDS:', flush=True)
     cases = run_cases(model)
+    print('bad depth images as scenes, through the node over DDS:', flush=True)
+    scene_cases = run_scene_cases(model)
     print('broken model files, at start-up of the node and the CLI:', flush=True)
     faults = run_faults(default_model_path(), work)
     print('damaged and surprising bags:', flush=True)
@@ -426,11 +488,12 @@ def _run(args) -> int:
         soak = soak_mod.run(20.0, 5.0, 2, driver_profile=soak_mod.LARGE_CLOUDS_PROFILE)
     elif args.soak_duration > 0:
         soak = soak_mod.run(args.soak_duration, driver_profile=soak_mod.LARGE_CLOUDS_PROFILE)
-    path = write_report(Path(args.out), cases, faults, bags, soak, work, command)
+    path = write_report(Path(args.out), cases, scene_cases, faults, bags, soak, work, command)
     shutil.rmtree(work, ignore_errors=True)
     print(f'wrote {path}')
     passed = (
         all(ok for _, _, ok in cases)
+        and all(ok for _, _, ok in scene_cases)
         and all(all(ok) for _, _, ok in faults)
         and (soak is None or soak['passed'])
     )

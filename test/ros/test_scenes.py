@@ -104,7 +104,7 @@ class Stream:
         """Publish the scene (if any), then the cloud once the node holds it; await the answer."""
         if scene is not None:
             self.scenes.publish(scene)
-            buffered = self.node.answerer._scenes.buffer
+            buffered = self.node.answerer.scenes.buffer
             assert wait_for(lambda: buffered.find(DEPTH, scene.header) is not None, 10)
         before = self.stats.counts['answered']
         self.objects.publish(xyz_to_pointcloud2(cloud, _header(sec, frame)))
@@ -315,7 +315,7 @@ def test_worker_processes_are_sent_the_cropped_scene_and_use_it(model, view, mon
             assert wait_for(lambda: objects.get_subscription_count()
                             and scenes.get_subscription_count(), 10)
             scenes.publish(depth)
-            kept = node.answerer._scenes.buffer
+            kept = node.answerer.scenes.buffer
             assert wait_for(lambda: kept.find(depth_topic, depth.header), 10)
             objects.publish(xyz_to_pointcloud2(view.points, _header(3)))
             assert wait_for(lambda: stats.counts['answered'] == 1, 120), dict(stats.counts)
@@ -369,7 +369,7 @@ def test_depth_images_are_answered_with_their_camera_info_and_bad_ones_counted(v
         objects = client.create_publisher(PointCloud2, f'/{topic}', RELIABLE)
         images = client.create_publisher(Image, f'/{depth_topic}', RELIABLE)
         infos = client.create_publisher(CameraInfo, '/scene_images/depth/camera_info', RELIABLE)
-        stats, scenes = node.stats[topic], node.answerer._scenes
+        stats, scenes = node.stats[topic], node.answerer.scenes
 
         def send(sec, image, info=None):
             if info is not None:
