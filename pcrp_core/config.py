@@ -248,13 +248,11 @@ class PoseOptions(Options):
         low=0,
     )
     seeders_view: int = setting(0, 'The same for clouds from a sensor.', low=0)
-    # off: on whole clouds principal axes and half turns find the poses feature matches find,
-    # and the gallery objects' point features, computed per query, cost 13-28 % of the time
     whole_features: bool = setting(
-        False,
+        True,
         'Whole clouds: also seed RANSAC hypotheses from the point features of the '
-        'n_matched first candidates (as the paper does; principal axes and half turns '
-        "find the same poses, without the gallery's features).",
+        'n_matched first candidates (principal axes and half turns find the same '
+        "poses, without the gallery's features).",
     )
     pool_size: int = setting(6, 'Whole clouds: distinct rotations that go to the vote.', low=1)
     pool_size_view: int = setting(6, 'The same for clouds from a sensor.', low=1)
