@@ -103,7 +103,8 @@ def _msg(points, header, dtype=np.float32, extra=None):
     return xyz_to_pointcloud2(points, header, dtype, extra)
 
 
-def _with(msg, **changes):
+def changed(msg, **changes):
+    """Return a copy of a message with some of its fields changed."""
     out = copy.copy(msg)
     for k, v in changes.items():
         setattr(out, k, v)
@@ -118,7 +119,7 @@ def _organised_with_holes(g, h):
     slots = np.sort(rng.choice(len(grid), n, replace=False))
     grid[slots] = g.points
     msg = _msg(grid, h)
-    return _with(
+    return changed(
         msg,
         height=len(grid) // width,
         width=width,
@@ -130,7 +131,7 @@ def _organised_with_holes(g, h):
 def _big_endian(g, h):
     msg = _msg(g.points, h)
     data = np.frombuffer(bytes(msg.data), dtype='<f4').astype('>f4').tobytes()
-    return _with(msg, is_bigendian=True, data=data)
+    return changed(msg, is_bigendian=True, data=data)
 
 
 def _reordered_with_extras(g, h):
@@ -153,7 +154,7 @@ def _reordered_with_extras(g, h):
         )
         for name in rec.dtype.names
     ]
-    return _with(
+    return changed(
         msg, fields=fields, point_step=rec.itemsize, row_step=rec.itemsize * n, data=rec.tobytes()
     )
 
@@ -167,7 +168,7 @@ def _padded_rows(g, h):
         n // width, width * msg.point_step
     )
     padded = np.concatenate([rows, np.zeros((len(rows), 8), np.uint8)], axis=1)
-    return _with(
+    return changed(
         msg, height=len(rows), width=width, row_step=padded.shape[1], data=padded.tobytes()
     )
 
@@ -261,7 +262,7 @@ CASES = [
     Case(
         'missing_z',
         'no z field',
-        lambda g, h: _with(_msg(g.points, h), fields=_msg(g.points, h).fields[:2]),
+        lambda g, h: changed(_msg(g.points, h), fields=_msg(g.points, h).fields[:2]),
         _rejected('missing_field'),
     ),
     Case(
@@ -290,25 +291,25 @@ CASES = [
     Case(
         'point_step_small',
         'point_step smaller than the fields need',
-        lambda g, h: _with(_msg(g.points, h), point_step=8),
+        lambda g, h: changed(_msg(g.points, h), point_step=8),
         _rejected('bad_layout'),
     ),
     Case(
         'data_short',
         'data shorter than row_step x height',
-        lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data)[:1000]),
+        lambda g, h: changed(_msg(g.points, h), data=bytes(_msg(g.points, h).data)[:1000]),
         _rejected('truncated_data'),
     ),
     Case(
         'data_long',
         'data 100 bytes longer than row_step x height',
-        lambda g, h: _with(_msg(g.points, h), data=bytes(_msg(g.points, h).data) + bytes(100)),
+        lambda g, h: changed(_msg(g.points, h), data=bytes(_msg(g.points, h).data) + bytes(100)),
         _ANSWER,
     ),
     Case(
         'row_step_small',
         'row_step less than width x point_step',
-        lambda g, h: _with(_msg(g.points, h), row_step=12),
+        lambda g, h: changed(_msg(g.points, h), row_step=12),
         _rejected('bad_layout'),
     ),
     Case('row_padding', 'organised, 8 bytes of padding after each row', _padded_rows, _ANSWER),
@@ -340,7 +341,7 @@ def _bad_datatype(g, h):
     msg = _msg(g.points, h)
     fields = [copy.copy(f) for f in msg.fields]
     fields[0].datatype = 42
-    return _with(msg, fields=fields)
+    return changed(msg, fields=fields)
 
 
 # -- running them through a live node -------------------------------------------------------------

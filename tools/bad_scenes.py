@@ -28,11 +28,14 @@ import time
 from typing import Callable
 
 import numpy as np
+from pcrp_ros.spinning import wait_for
+from tools.bad_clouds import changed
 
 FRAME = 'camera_depth_optical_frame'
 OBJECT_TOPIC, IMAGE_TOPIC = 'segmented_object', 'camera/depth/image_rect_raw'
 INFO_TOPIC = 'camera/depth/camera_info'
 VIEW_OBJECT, VIEW_SEED = 'drill', 5      # an object with no symmetry, seen whole, in free space
+HELD_SECONDS, STEP = 10.0, 0.02          # how long, how often to look for the node holding a frame
 
 
 def node_parameters() -> list:
@@ -75,18 +78,23 @@ def camera_frame(model) -> Frame:
     from pcrp_core.sources import load_source
 
     obj = next(o for o in load_source('household', split='train') if o.gallery_id == VIEW_OBJECT)
-    scene = sample_scene(obj.mesh, VIEW_OBJECT, 0, 0, 'free', seed=VIEW_SEED)
+    frame = frame_of(sample_scene(obj.mesh, VIEW_OBJECT, 0, 0, 'free', seed=VIEW_SEED))
+    answer = model.estimate(frame.points, viewpoint=np.zeros(3))
+    if answer.rejected or answer.gallery_id != VIEW_OBJECT:
+        raise RuntimeError(f'the model answers its {VIEW_OBJECT} seen whole as '
+                           f'{answer.gallery_id!r}')
+    return frame
+
+
+def frame_of(scene) -> Frame:
+    """Return the Frame of a rendered view (evaluation.scenes.Scene): a wall 0.3 m behind it."""
     far = float(scene.points[:, 2].max()) + 0.3
     z = scene.depth_image().z
     mm = np.rint(np.where(np.isfinite(z), z, far) * 1000).astype('<u2')
     mm[::7, ::5] = 0                                         # pixels without a depth
     cam = scene.camera
-    answer = model.estimate(scene.points.astype(np.float64), viewpoint=np.zeros(3))
-    if answer.rejected or answer.gallery_id != VIEW_OBJECT:
-        raise RuntimeError(f'the model answers its {VIEW_OBJECT} seen whole as '
-                           f'{answer.gallery_id!r}')
     return Frame(scene.points.astype(np.float64), mm, (cam.fx, cam.fy, cam.cx, cam.cy),
-                 VIEW_OBJECT)
+                 scene.object_id)
 
 
 def image(frame: Frame, header, depth=None, encoding: str = '16UC1', bigendian: bool = False,
@@ -118,18 +126,16 @@ def _metres(frame: Frame, fill=None):
     return z if fill is None else np.full_like(z, fill)
 
 
-def _with(msg, **changes):
-    for k, v in changes.items():
-        setattr(msg, k, v)
-    return msg
-
-
 def _restamped(header, frame_id=None, nanosec=None):
     from std_msgs.msg import Header
     from builtin_interfaces.msg import Time
     return Header(stamp=Time(sec=header.stamp.sec, nanosec=header.stamp.nanosec
                              if nanosec is None else nanosec),
                   frame_id=header.frame_id if frame_id is None else frame_id)
+
+
+def _cut_short(msg):
+    return changed(msg, data=msg.data[:1000])
 
 
 def _good(f, h):
@@ -164,11 +170,11 @@ CASES = [
     SceneCase('negative', '32FC1, every pixel -1 m',
               lambda f, h: (image(f, h, _metres(f, -1.0), '32FC1'), None), 'used'),
     SceneCase('rgb8', 'a colour image (rgb8) on the depth topic',
-              lambda f, h: (_with(image(f, h), encoding='rgb8'), None), 'rejected_bad_encoding'),
+              lambda f, h: (changed(image(f, h), encoding='rgb8'), None), 'rejected_bad_encoding'),
     SceneCase('step_small', 'step smaller than width x 2 bytes',
-              lambda f, h: (_with(image(f, h), step=100), None), 'rejected_bad_layout'),
+              lambda f, h: (changed(image(f, h), step=100), None), 'rejected_bad_layout'),
     SceneCase('data_short', 'data shorter than step x height',
-              lambda f, h: (_with(image(f, h), data=image(f, h).data[:1000]), None),
+              lambda f, h: (_cut_short(image(f, h)), None),
               'rejected_truncated_data'),
     SceneCase('info_other_size', 'CameraInfo of 320 x 240 for a 640 x 480 image',
               lambda f, h: (image(f, h), camera_info(f, h, size=(240, 320))),
@@ -231,22 +237,14 @@ class SceneCaseRunner:
     def ready(self, timeout: float = 30.0) -> bool:
         """Wait until the node and the runner see each other on all three topics."""
         pubs = (self.clouds, self.images, self.infos)
-        return self._held(lambda: all(p.get_subscription_count() for p in pubs) and all(
-            self.node.count_publishers(p.topic_name) for p in pubs), timeout)
+        return wait_for(lambda: all(p.get_subscription_count() for p in pubs) and all(
+            self.node.count_publishers(p.topic_name) for p in pubs), timeout, STEP)
 
     def _header(self):
         from builtin_interfaces.msg import Time
         from std_msgs.msg import Header
         self._sec += 1
         return Header(stamp=Time(sec=self._sec, nanosec=500), frame_id=FRAME)
-
-    def _held(self, test, timeout: float = 10.0) -> bool:
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            if test():
-                return True
-            time.sleep(0.02)
-        return False
 
     def send(self, make, timeout: float = 60.0) -> SceneOutcome:
         from pcrp_ros.conversions import xyz_to_pointcloud2
@@ -255,16 +253,18 @@ class SceneCaseRunner:
         topic = IMAGE_TOPIC
         if info is not None:
             self.infos.publish(info)
-            self._held(lambda: self.scenes.camera_info.get(topic) is not None
-                       and self.scenes.camera_info[topic].header.stamp == info.header.stamp)
+            wait_for(lambda: self.scenes.camera_info.get(topic) is not None
+                     and self.scenes.camera_info[topic].header.stamp == info.header.stamp,
+                     HELD_SECONDS, STEP)
         self.images.publish(msg)
-        self._held(lambda: self.scenes.buffer.find(topic, msg.header) is not None)
+        wait_for(lambda: self.scenes.buffer.find(topic, msg.header) is not None, HELD_SECONDS,
+                 STEP)
         counts, scenes = dict(self.stats.counts), dict(self.stats.scenes)
         t0 = time.monotonic()
         self.clouds.publish(xyz_to_pointcloud2(self.frame.points, header))
         decided = lambda: sum(self.stats.counts[k] - counts.get(k, 0)  # noqa: E731
                               for k in ('answered', 'rejected', 'dropped_stale'))
-        self._held(decided, timeout)
+        wait_for(decided, timeout, STEP)
         seconds = time.monotonic() - t0
         counted = [k for k, v in self.stats.scenes.items() if v > scenes.get(k, 0)]
         if self.stats.counts['answered'] > counts.get('answered', 0):

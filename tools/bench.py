@@ -371,8 +371,8 @@ def bench_node(
                 workers=workers,
                 scene=scene,
             )
-            answered = sum(d['answered'] for d in r['per_topic'].values())
             per = r['per_topic'].values()
+            answered = sum(d['answered'] for d in per)
             rows.append(
                 {
                     'topics': n,

@@ -35,6 +35,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosutil import ros_context, spinning, wait_for
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2
 from std_msgs.msg import Header
+from tools import bad_scenes
 
 OBJECT, DEPTH = 'scene_test/object', 'scene_test/depth'
 FRAME = 'camera_depth_optical_frame'
@@ -334,19 +335,11 @@ def test_worker_processes_are_sent_the_cropped_scene_and_use_it(model, view, mon
 
 def _depth_image(view, header, encoding='16UC1'):
     """Make the depth image a camera driver publishes (millimetres), a wall behind the object."""
-    image = view.depth_image()
-    far = float(view.points[:, 2].max()) + 0.3
-    mm = np.rint(np.where(np.isfinite(image.z), image.z, far) * 1000).astype('<u2')
-    mm[::7, ::5] = 0                                         # pixels without a depth
-    rows, cols = mm.shape
-    return Image(header=header, height=rows, width=cols, encoding=encoding, is_bigendian=0,
-                 step=cols * 2, data=mm.tobytes())
+    return bad_scenes.image(bad_scenes.frame_of(view), header, encoding=encoding)
 
 
 def _camera_info(view, header):
-    cam = view.camera
-    return CameraInfo(header=header, width=cam.width, height=cam.height,
-                      k=[cam.fx, 0.0, cam.cx, 0.0, cam.fy, cam.cy, 0.0, 0.0, 1.0])
+    return bad_scenes.camera_info(bad_scenes.frame_of(view), header)
 
 
 def test_depth_images_are_answered_with_their_camera_info_and_bad_ones_counted(view):
