@@ -27,6 +27,8 @@ seeding.py     the hypotheses each retrieved candidate contributes (generators: 
 upright.py     dropping hypotheses that tip the object when which way is up is known
 vote.py        the candidates' vote on the rotation
 refinement.py  the final ICP, averaging over agreeing candidates, the mirror-plane finish
+evidence.py    what an answer says about itself; calibration.py the confidence learnt from it
+frames.py      which way one gallery object is turned against another (for the calibration)
 """
 
 from pcrp_core.category.prepared import prepare, Prepared

@@ -34,20 +34,13 @@ width), objects lying both ways are labels turned by a quarter turn against each
 from __future__ import annotations
 
 import numpy as np
-from pcrp_core.hypotheses import AXIS_ROTATIONS
+from pcrp_core.category.frames import AXIS_ROTATIONS, chamfer_by_rotation, IDENTITY, subsample
 from scipy.spatial import cKDTree
 from tools.paper_eval.metrics import geodesic_deg
 from tools.paper_eval.protocol import load_split
 
 ELONGATED = 1.5  # long side / short side: which side is longer is then the object's, not noise
-POINTS = 128  # per cloud: enough to tell a quarter or half turn of an object apart
-IDENTITY = int(np.flatnonzero([np.allclose(M, np.eye(3)) for M in AXIS_ROTATIONS])[0])
 _GALLERIES: dict = {}
-
-
-def _subsample(points: np.ndarray, seed: int) -> np.ndarray:
-    idx = np.random.default_rng(seed).choice(len(points), POINTS, replace=False)
-    return points[idx] - points.mean(0)
 
 
 def _gallery(data, category: str, exclude=()):
@@ -60,21 +53,9 @@ def _gallery(data, category: str, exclude=()):
     if key not in _GALLERIES:
         names, pts = load_split(data, category, 'train')
         skip = set(exclude)
-        clouds = [_subsample(p, i) for i, (n, p) in enumerate(zip(names, pts)) if n not in skip]
+        clouds = [subsample(p, i) for i, (n, p) in enumerate(zip(names, pts)) if n not in skip]
         _GALLERIES[key] = (np.stack(clouds), [cKDTree(c) for c in clouds])
     return _GALLERIES[key]
-
-
-def chamfer_by_rotation(query: np.ndarray, clouds: np.ndarray, trees) -> np.ndarray:
-    """Return (G, 24) symmetric chamfers of the query turned by each axis map to each cloud."""
-    rotated = np.einsum('rij,nj->rni', AXIS_ROTATIONS, query)                   # (24, n, 3)
-    g, n = clouds.shape[:2]
-    flat = clouds.reshape(-1, 3)
-    back = np.stack([cKDTree(r).query(flat)[0].reshape(g, n).mean(1) for r in rotated], axis=1)
-    forth = np.stack(
-        [t.query(rotated.reshape(-1, 3))[0].reshape(len(rotated), -1).mean(1) for t in trees]
-    )
-    return back + forth
 
 
 def audit_one(state: dict, item) -> dict:
@@ -86,7 +67,7 @@ def audit_one(state: dict, item) -> dict:
     """
     name, category, points = item
     clouds, trees = _gallery(state['data'], category, state.get('exclude', {}).get(category, ()))
-    cost = chamfer_by_rotation(_subsample(points, 0), clouds, trees)
+    cost = chamfer_by_rotation(subsample(points, 0), clouds, trees)
     best = cost.argmin(1)
     nearest = np.argsort(cost.min(1))
     return {'name': name, 'category': category,
