@@ -76,9 +76,11 @@ NOTES = """\
   When the gallery holds the object itself (the robot's case) a right answer fits almost perfectly
   and a wrong one does not, so most rejected clouds are ones that would have been wrong. When the
   gallery holds only relatives (the category-level tables), a right pose on a different instance
-  fits less well, and the threshold refuses right answers about as readily as wrong ones; it still
-  refuses most objects from other categories (the rejection and confidence tables).
-  `min_confidence` moves the trade either way."""  # noqa: E501
+  fits less well: whole clouds keep most right answers (airplanes and cars read with their labels
+  either way, as the confidence is learnt), but a one-sided view of a relative fits so much worse
+  that most right answers are refused with the wrong ones; most objects from other categories are
+  refused either way (the rejection and confidence tables). `min_confidence` moves the trade
+  either way."""  # noqa: E501
 
 
 def _f(x, nd=2):
@@ -544,7 +546,10 @@ def confidence_md(conf: dict, out: Path) -> list[str]:
         "Each answer's confidence is the probability, learnt when the model was built on its own "
         'train objects (each queried as it is, with itself left out of the gallery, and with its '
         'whole category left out; `pcrp_core/category/calibration.py`), that the answer is right: '
-        f'the right category and a rotation within {pcrp_right_deg():.0f}°. Queries: test objects '
+        f'the right category and a rotation within {pcrp_right_deg():.0f}° of the labels, or of '
+        'laying the gallery object it answered with on the cloud (where the objects of a category '
+        "disagree about which way is front, as this copy's airplanes and cars do, the answered "
+        'object at the answered pose is what a user acts on). Queries: test objects '
         "of the gallery's four categories and of twelve it does not hold "
         f"({', '.join(ct.OUTSIDE)}; no choice was made on them), uniformly rotated, whole and "
         'one-sided; the four-category gallery. Right answers are accepted when their confidence '
@@ -577,18 +582,25 @@ def confidence_md(conf: dict, out: Path) -> list[str]:
         L += [
             '',
             'Labels either way: airplane and car answers judged up to a quarter or half turn of '
-            'their labels about the up axis, as in the pose tables; the confidence itself was '
-            "learnt on the train objects' own labels, which disagree the same way.",
+            'their labels about the up axis, as in the pose tables. For these two categories that '
+            'is what the confidence was learnt to mean (an answer laying the object it answered '
+            'with on the cloud is right), so those rows are the ones it is calibrated for; judged '
+            'by their own labels, an airplane or car turned as its look-alikes are counts wrong '
+            'however well it fits.',
         ]
     rel = sm.get('all', {}).get('reliability', [])
+    rel_either = either.get('all', {}).get('reliability', [])
+    if len(rel_either) != len(rel):  # results written before the column existed
+        rel_either = [(c, float('nan'), n) for c, _, n in rel]
     L += [
         '',
         'Reliability over all these answers (a confidence that means what it says lies on the '
         'diagonal):',
         '',
-        '| mean confidence in bin | share right | answers |',
-        '|---|---|---|',
-        *[f'| {c:.2f} | {r:.2f} | {n} |' for c, r, n in rel],
+        '| mean confidence in bin | share right | share right, labels either way | answers |',
+        '|---|---|---|---|',
+        *[f'| {c:.2f} | {r:.2f} | {e:.2f} | {n} |'
+          for (c, r, n), (_, e, _) in zip(rel, rel_either)],
         '',
     ]
     if ct.plot(sm, out / 'confidence.png'):
