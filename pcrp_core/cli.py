@@ -182,7 +182,10 @@ def register_query(sub) -> None:
     p.add_argument('cloud', help='cloud file: PLY, PCD, XYZ or NPY (N, 3); meshes are sampled')
     p.add_argument('--json', action='store_true', help='print the result as JSON')
     p.add_argument(
-        '--candidates', type=int, default=None, help='gallery objects to verify (n_candidates)'
+        '--candidates',
+        type=int,
+        default=None,
+        help='gallery objects to verify (n_candidates, and n_candidates_view for views)',
     )
     p.add_argument(
         '--min-confidence',
@@ -228,6 +231,7 @@ def _query(args) -> int:
         k: v
         for k, v in (
             ('n_candidates', args.candidates),
+            ('n_candidates_view', args.candidates),
             ('min_confidence', args.min_confidence),
             ('up_tolerance_deg', args.up_tolerance),
         )

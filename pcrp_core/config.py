@@ -153,6 +153,13 @@ class QueryOptions(Options):
         low=1,
         high=50,
     )
+    n_candidates_view: int = setting(
+        24,
+        'Retrieved gallery objects registered and voted on per cloud from a sensor: a '
+        'one-sided view needs more look-alikes to vote.',
+        low=1,
+        high=50,
+    )
     min_confidence: float = setting(
         0.5,
         'Answers less confident than this are rejected (reason low_confidence); '
@@ -443,7 +450,7 @@ PAPER_POSE = PoseOptions(
     whole_features=True,
     reverse_weight=0.0,
 )
-PAPER_QUERY = {'n_candidates': 1, 'n_matched': 1, 'min_confidence': 0.0}
+PAPER_QUERY = {'n_candidates': 1, 'n_candidates_view': 1, 'n_matched': 1, 'min_confidence': 0.0}
 
 
 def user_settings() -> list[dict[str, Any]]:

@@ -71,7 +71,8 @@ def answer(
     sampled, feats, vec = describe(model.pointhop, model.vlad, normed, vp, timings)
     t2 = time.perf_counter()
     timings['features'] = t2 - t1
-    idx, dist = model.gallery.search(vec, max(10, opts.n_candidates), exclude)
+    n_candidates = opts.n_candidates if viewpoint is None else opts.n_candidates_view
+    idx, dist = model.gallery.search(vec, max(10, n_candidates), exclude)
     t3 = time.perf_counter()
     timings['retrieval'] = t3 - t2
     rng = np.random.default_rng(opts.seed)
@@ -86,7 +87,7 @@ def answer(
         timings,
         up_pair,
     )
-    top = [int(i) for i in idx[: opts.n_candidates]]
+    top = [int(i) for i in idx[:n_candidates]]
     # a gallery object's point features cost as much as the query's: whole clouds do without them
     n_matched = opts.n_matched if viewpoint is not None or pose_opts.whole_features else 0
     matched = [model.prepared.get(i, True, opts.cache_size) for i in top[:n_matched]]

@@ -229,3 +229,18 @@ def test_settings_are_validated_and_an_invalid_change_changes_nothing(model):
     with pytest.warns(DeprecationWarning, match='min_confidence'):
         variant = model.with_options(min_score=0.25)
     assert variant.options.min_confidence == 0.25
+
+
+def test_clouds_from_a_sensor_are_voted_on_by_their_own_number_of_candidates(model, monkeypatch):
+    from pcrp_core.sources.views import partial_view
+    asked = []
+    search = model.gallery.search
+    monkeypatch.setattr(
+        model.gallery, 'search', lambda vec, k, *a: asked.append(k) or search(vec, k, *a)
+    )
+    variant = model.with_options(n_candidates=12, n_candidates_view=20)
+    cloud = model.gallery_cloud(model.gallery_ids[0]).astype(np.float64)
+    variant.estimate(cloud)
+    part, camera = partial_view(cloud, np.random.default_rng(5), 0.0, with_camera=True)
+    variant.estimate(part, viewpoint=camera)
+    assert asked == [12, 20]
