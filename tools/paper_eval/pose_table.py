@@ -27,7 +27,8 @@ from tools.paper_eval.metrics import pose_error, rotation_summary
 from tools.paper_eval.models import category_model, loaded
 
 METHODS = {
-    'pcrp': "PCRP, this package's defaults (16 candidates verified, half turns, ICP)",
+    'pcrp': "PCRP, this package's defaults (16 candidates verified, 24 for one-sided views, half "
+            'turns, ICP)',
     'pcrp_paper': 'PCRP as the paper describes it (top-1 object, RANSAC on symmetry-split '
                   'matches)',
     'icp': "ICP alone, from the centroids' offset",

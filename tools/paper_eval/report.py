@@ -312,8 +312,9 @@ def category_view_bar(res: dict) -> list[str]:
                           (f'the gallery built with `--views {VIEWS}`',
                            res.get('partial_views', {}).get('view'))):
         t = (section or {}).get('summary', {}).get('all', {}).get('pcrp', {}).get('tolerant')
-        if t:
-            got.append(f"{_pct(t['under_10'])} with {name}")
+        if t:   # one decimal: 69.5 % must not read as a met 70 %
+            met = 'met' if t['under_10'] >= 0.70 else '**missed**'
+            got.append(f"{100 * t['under_10']:.1f} % ({met}) with {name}")
     if not got:
         return []
     return [
