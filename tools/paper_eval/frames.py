@@ -34,7 +34,8 @@ width), objects lying both ways are labels turned by a quarter turn against each
 from __future__ import annotations
 
 import numpy as np
-from pcrp_core.category.frames import AXIS_ROTATIONS, chamfer_by_rotation, IDENTITY, subsample
+from pcrp_core.category.frames import chamfer_by_rotation, IDENTITY, subsample
+from pcrp_core.hypotheses import AXIS_ROTATIONS
 from scipy.spatial import cKDTree
 from tools.paper_eval.metrics import geodesic_deg
 from tools.paper_eval.protocol import load_split
