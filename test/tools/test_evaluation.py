@@ -346,3 +346,23 @@ def test_a_partial_run_carries_the_rest_of_an_earlier_one_and_says_so():
     assert again['carried'] == {'frames': 'then', 'pose/view': 'then', 'pose/uniform': 'now'}
     with pytest.raises(ValueError, match='seed'):
         carry(res, {**earlier, 'seed': 1})
+
+
+def test_the_confidence_section_judges_reliability_by_the_labels_and_either_way(tmp_path):
+    from tools.paper_eval import confidence_table as ct, report
+    rng = np.random.default_rng(0)
+    rows = []
+    for i in range(80):
+        inside, c = i < 60, float(rng.uniform())
+        right = inside and c > 0.5
+        rows.append({'kind': 'whole' if i % 2 else 'view', 'inside': inside, 'confidence': c,
+                     'right': right and i % 3 > 0, 'right_tolerant': right})
+    conf = {'threshold': 0.5, 'summary': ct.summarise(rows, 0.5),
+            'summary_tolerant': ct.summarise(rows, 0.5, 'right_tolerant')}
+    text = '\n'.join(report.confidence_md(conf, tmp_path))
+    assert '| mean confidence in bin | share right | share right, labels either way | answers |' \
+        in text
+    # the bins are the same answers: only the share right differs between the two columns
+    table = [line.split(' | ') for line in text.splitlines() if line.startswith('| 0.')]
+    assert table and any(float(raw) < float(either) for _, raw, either, _ in table)
+    assert (tmp_path / 'confidence.png').stat().st_size > 0

@@ -118,8 +118,13 @@ def summarise(rows: list[dict], threshold: float, right_key: str = 'right') -> d
     return out
 
 
-def plot(summary: dict, path) -> bool:
-    """Reliability diagram (share right against confidence) and ROC curves, one line per kind."""
+def plot(summary: dict, path, either: dict | None = None) -> bool:
+    """
+    Reliability diagram (share right against confidence) and ROC curves, one line per kind.
+
+    either: the same summary judged with airplanes' and cars' labels either way, whose reliability
+    over all answers is drawn beside.
+    """
     import matplotlib
 
     matplotlib.use('Agg')
@@ -135,6 +140,10 @@ def plot(summary: dict, path) -> bool:
             a.plot(rel[:, 0], rel[:, 1], style, label=f"{kind} (ECE {d['ece']:.2f})")
         if 'roc' in d:
             b.plot(*d['roc'], style, label=f"{kind} (AUC {d['auc']:.2f})")
+    rel = np.array((either or {}).get('all', {}).get('reliability', []))
+    if len(rel):
+        ece = either['all']['ece']
+        a.plot(rel[:, 0], rel[:, 1], 'r--', label=f'all, labels either way (ECE {ece:.2f})')
     a.plot([0, 1], [0, 1], ':', color='grey')
     a.set(
         xlabel='confidence (mean in bin)', ylabel='share right', title='reliability, all answers'

@@ -604,7 +604,7 @@ def confidence_md(conf: dict, out: Path) -> list[str]:
           for (c, r, n), (_, e, _) in zip(rel, rel_either)],
         '',
     ]
-    if ct.plot(sm, out / 'confidence.png'):
+    if ct.plot(sm, out / 'confidence.png', either):
         L += ['![Reliability diagram and ROC curves](confidence.png)', '']
     return L
 
