@@ -37,7 +37,7 @@ import time
 import numpy as np
 from tools.bench_plots import GROWTH_PLOT, growth_plot, slope
 from tools.process_memory import tree_rss_mb
-from tools.provenance import code_key, machine
+from tools.provenance import built_once, code_key, machine
 from tools.soak import LARGE_CLOUDS_PROFILE
 
 CATEGORIES = ('airplane', 'chair', 'sofa', 'car')
@@ -301,8 +301,6 @@ def bench_scale(data: Path, sizes, seed: int, n_queries: int = 20, progress=prin
     for size in sizes:
         size = min(size, len(everything))
         path = CACHE / f'gallery_{size}_seed{seed}_{key}'
-        # what the build cost is kept beside the model, so a cached gallery still reports it
-        record = CACHE / f'{path.name}_build.json'
         # drawn whether or not the gallery is cached, so each size gets the same objects
         # however many of the others were built already
         pick = (
@@ -310,17 +308,17 @@ def bench_scale(data: Path, sizes, seed: int, n_queries: int = 20, progress=prin
             if size < len(everything)
             else range(size)
         )
-        if not (path / 'model.json').exists() or not record.exists():
+
+        def build():
             objs = [
                 GalleryObject(everything[i][0], everything[i][1], everything[i][2]) for i in pick
             ]
             progress(f'bench: building a {size}-object gallery (cached in {path})')
-            t0 = time.perf_counter()
             PCRP.build(
                 objs, seed=seed, sources=[f'{len(archives)} ModelNet40 archives, {size} objects']
             ).save(path)
-            record.write_text(json.dumps({'seconds': time.perf_counter() - t0}))
-        built = json.loads(record.read_text())['seconds']
+
+        built = built_once(path, build)['seconds']
         model = PCRP.load(path)
         model.retrieve(queries[0][2])
         t_all, t_search = [], []

@@ -36,7 +36,7 @@ import tempfile
 import time
 
 import numpy as np
-from tools.provenance import code_key
+from tools.provenance import built_once, code_key
 
 REPO = Path(__file__).resolve().parents[1]
 THREADS = {v: '1' for v in ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS')}
@@ -64,10 +64,9 @@ def ycb_model(ycb: Path, cache: Path) -> tuple[str, dict]:
     Cached under the code that builds it (as the robot report's models): a model kept from
     older code would time today's queries on yesterday's gallery.
     """
-    name = f'ycb_{code_key()}'
-    path, info = cache / name, cache / f'{name}_build.json'
-    if not (path / 'model.json').exists() or not info.exists():
-        t0 = time.perf_counter()
+    path = cache / f'ycb_{code_key()}'
+
+    def build() -> dict:
         subprocess.run(
             [
                 sys.executable,
@@ -85,9 +84,9 @@ def ycb_model(ycb: Path, cache: Path) -> tuple[str, dict]:
             capture_output=True,
         )
         from pcrp_core.model_io import model_size
-        info.write_text(json.dumps({'seconds': time.perf_counter() - t0, 'bytes': model_size(path),
-                                    'objects': len(list(ycb.glob('*.ply')))}))
-    return str(path), json.loads(info.read_text())
+        return {'bytes': model_size(path), 'objects': len(list(ycb.glob('*.ply')))}
+
+    return str(path), built_once(path, build)
 
 
 def views(model_path: str, ycb: Path, per_kind: int, seed: int = 0) -> dict:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import hashlib
 from importlib import metadata
+import json
 import os
 from pathlib import Path
 import platform
@@ -89,3 +90,18 @@ def code_key() -> str:
         if path.is_file():   # a file deleted but not yet committed is listed too
             digest.update(name.encode() + b'\0' + path.read_bytes() + b'\0')
     return digest.hexdigest()[:12]
+
+
+def built_once(path: Path, build) -> dict:
+    """
+    Return the record of what building the model at path cost: {'seconds': ..., **build()}.
+
+    build() makes the model at path (and may return more to record) when the model or its record
+    (kept beside it, `<name>_build.json`) is missing, so a cached model still reports its cost.
+    """
+    record = path.parent / f'{path.name}_build.json'
+    if not (path / 'model.json').exists() or not record.exists():
+        t0 = time.perf_counter()
+        more = build() or {}
+        record.write_text(json.dumps({'seconds': time.perf_counter() - t0, **more}))
+    return json.loads(record.read_text())

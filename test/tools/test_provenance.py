@@ -58,3 +58,20 @@ def test_a_change_to_model_code_changes_the_key_and_to_a_report_does_not(checkou
     assert changed != before
     (checkout / 'pcrp_core' / 'matcher.py').unlink()
     assert provenance.code_key() not in (before, changed)
+
+
+def test_a_model_is_built_once_and_its_cost_read_back_until_its_record_is_gone(tmp_path):
+    path, builds = tmp_path / 'model', []
+
+    def build():
+        path.mkdir(exist_ok=True)
+        (path / 'model.json').write_text('{}')
+        builds.append(1)
+        return {'objects': 3}
+
+    first = provenance.built_once(path, build)
+    assert first['objects'] == 3 and first['seconds'] >= 0.0
+    assert provenance.built_once(path, build) == first and len(builds) == 1
+    (tmp_path / 'model_build.json').unlink()     # a model without its record is built again
+    provenance.built_once(path, build)
+    assert len(builds) == 2
