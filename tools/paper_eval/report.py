@@ -305,6 +305,9 @@ def failure_bands(res: dict) -> list[str]:
     return lines + ['']
 
 
+VIEW_BAR = 0.70  # unseen instances seen one-sided: the share asked within 10°
+
+
 def category_view_bar(res: dict) -> list[str]:
     """Return the category-level one-sided bar: within 10° on >= 70 %, labels either way."""
     got = []
@@ -313,13 +316,14 @@ def category_view_bar(res: dict) -> list[str]:
                            res.get('partial_views', {}).get('view'))):
         t = (section or {}).get('summary', {}).get('all', {}).get('pcrp', {}).get('tolerant')
         if t:   # one decimal: 69.5 % must not read as a met 70 %
-            met = 'met' if t['under_10'] >= 0.70 else '**missed**'
+            met = 'met' if t['under_10'] >= VIEW_BAR else '**missed**'
             got.append(f"{100 * t['under_10']:.1f} % ({met}) with {name}")
     if not got:
         return []
     return [
         "The bar for unseen instances seen one-sided (PCRP's defaults, airplane and car up to "
-        f"their labels): within 10° on at least 70 % of the queries; measured {', '.join(got)}.",
+        f'their labels): within 10° on at least {100 * VIEW_BAR:.0f} % of the queries; measured '
+        f"{', '.join(got)}.",
         '',
     ]
 
