@@ -319,6 +319,14 @@ class PoseOptions(Options):
     icp_trim: float = setting(
         0.8, 'Share of closest matches each ICP iteration keeps.', low=0.0, high=1.0, low_open=True
     )
+    icp_trim_view: float = setting(
+        1.0,
+        'The same for clouds from a sensor: a view is a part of its object, so every point of it '
+        'has a match to keep.',
+        low=0.0,
+        high=1.0,
+        low_open=True,
+    )
     icp_points: int = setting(256, 'Query points used by ICP and scoring.', low=16)
     coarse_points: int = setting(256, 'Query points hypotheses are told apart on.', low=16)
     inlier_distance: float = setting(

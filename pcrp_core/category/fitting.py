@@ -45,6 +45,7 @@ class Fitter:
         self, query: Prepared, opts: PoseOptions, rng: np.random.Generator, viewpoint=None
     ):
         self.query, self.opts, self.viewpoint = query, opts, viewpoint
+        self.trim = opts.icp_trim if viewpoint is None else opts.icp_trim_view
         src = query.sampled if query.sampled is not None else query.points
         if len(src) > opts.icp_points:
             src = src[rng.choice(len(src), opts.icp_points, replace=False)]
@@ -81,7 +82,7 @@ class Fitter:
                 Rs,
                 ts,
                 iterations,
-                opts.icp_trim,
+                self.trim,
                 opts.icp_tolerance,
                 prev,
                 state=True,

@@ -244,3 +244,20 @@ def test_clouds_from_a_sensor_are_voted_on_by_their_own_number_of_candidates(mod
     part, camera = partial_view(cloud, np.random.default_rng(5), 0.0, with_camera=True)
     variant.estimate(part, viewpoint=camera)
     assert asked == [12, 20]
+
+
+def test_clouds_from_a_sensor_keep_their_own_share_of_icp_matches(model, monkeypatch):
+    from pcrp_core.category import fitting
+    from pcrp_core.sources.views import partial_view
+    trims = []
+    icp = fitting.icp_batch
+    monkeypatch.setattr(
+        fitting, 'icp_batch', lambda *args, **kw: trims.append(args[6]) or icp(*args, **kw)
+    )
+    variant = model.with_options(icp_trim=0.7, icp_trim_view=0.9)
+    cloud = model.gallery_cloud(model.gallery_ids[0]).astype(np.float64)
+    variant.estimate(cloud)
+    whole, trims[:] = set(trims), []
+    part, camera = partial_view(cloud, np.random.default_rng(5), 0.0, with_camera=True)
+    variant.estimate(part, viewpoint=camera)
+    assert (whole, set(trims)) == ({0.7}, {0.9})
