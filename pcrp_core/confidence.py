@@ -66,6 +66,42 @@ class Calibration:
         )
 
 
+@dataclass(frozen=True)
+class SplitCalibration:
+    """
+    One Calibration for each of two kinds of answer, told apart by a 0/1 feature (key).
+
+    A whole cloud and a one-sided view read the same evidence differently (a right view lacks most
+    of its object, a right whole cloud does not), so each kind gets a regression of its own.
+    """
+
+    key: str
+    parts: tuple  # (the Calibration where key is 0, where it is 1)
+
+    @property
+    def names(self) -> tuple:
+        return self.parts[0].names
+
+    def probability(self, features: dict) -> float:
+        return self.parts[int(features[self.key] >= 0.5)].probability(features)
+
+    def to_arrays(self, prefix: str) -> dict:
+        out = {prefix + 'split_key': np.array(self.key)}
+        for value, part in enumerate(self.parts):
+            out.update(part.to_arrays(f'{prefix}{value}_'))
+        return out
+
+
+def calibration_from_arrays(arrays: dict, prefix: str) -> 'Calibration | SplitCalibration | None':
+    """Return the Calibration or SplitCalibration stored under prefix (None when there is none)."""
+    if prefix + 'split_key' not in arrays:
+        return Calibration.from_arrays(arrays, prefix)
+    parts = tuple(Calibration.from_arrays(arrays, f'{prefix}{value}_') for value in (0, 1))
+    if None in parts:
+        raise KeyError(f'{prefix}: a split calibration lacks a part')
+    return SplitCalibration(str(arrays[prefix + 'split_key']), parts)
+
+
 def fit_calibration(
     samples: list[dict], labels, names: tuple, regularisation: float = 1.0
 ) -> Calibration:
@@ -82,6 +118,30 @@ def fit_calibration(
     return Calibration(
         tuple(names), mean, scale, lr.coef_[0].astype(np.float64), float(lr.intercept_[0])
     )
+
+
+def fit_split_calibration(
+    samples: list[dict], labels, names: tuple, key: str, regularisation: float = 1.0
+) -> SplitCalibration:
+    """
+    fit_calibration() for each kind of sample (key 0 or 1) apart.
+
+    A kind whose samples are all right or all wrong gets the regression of all samples instead.
+    """
+    y = np.asarray(labels, dtype=bool)
+    kind = np.array([s[key] >= 0.5 for s in samples], dtype=bool)
+    pooled = fit_calibration(samples, y, names, regularisation)
+    parts = []
+    for value in (False, True):
+        mine = kind == value
+        parts.append(
+            fit_calibration(
+                [s for s, m in zip(samples, mine) if m], y[mine], names, regularisation
+            )
+            if 0 < y[mine].sum() < mine.sum()
+            else pooled
+        )
+    return SplitCalibration(key, tuple(parts))
 
 
 def reliability(confidence, right, bins: int = 10) -> list[tuple[float, float, int]]:

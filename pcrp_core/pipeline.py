@@ -29,7 +29,7 @@ import warnings
 
 import numpy as np
 from pcrp_core import model_io
-from pcrp_core.confidence import Calibration
+from pcrp_core.confidence import Calibration, calibration_from_arrays, SplitCalibration
 from pcrp_core.config import InstanceOptions, PoseOptions, QueryOptions, USER_POSE_SETTINGS
 from pcrp_core.errors import ModelError
 from pcrp_core.features import PointHop
@@ -76,7 +76,7 @@ class PCRP:
         n_points: int = 1024,
         templates: Templates | None = None,
         view_calibration: Calibration | None = None,
-        category_calibration: Calibration | None = None,
+        category_calibration: Calibration | SplitCalibration | None = None,
     ):
         # a process told OMP_NUM_THREADS=1 (a worker, a benchmark) means Open3D too (threads.py)
         threads_from_environment()
@@ -298,7 +298,7 @@ class PCRP:
                 raise ValueError('camera templates do not match the gallery')
             model = cls(pointhop, vlad, gallery, meta['unit'], meta, meta['n_points'], templates,
                         Calibration.from_arrays(arrays, VIEW_CALIBRATION),
-                        Calibration.from_arrays(arrays, CATEGORY_CALIBRATION))
+                        calibration_from_arrays(arrays, CATEGORY_CALIBRATION))
         except (KeyError, TypeError, ValueError) as e:
             raise ModelError(
                 f'{path}: model contents are incomplete or inconsistent ({type(e).__name__}: {e})'

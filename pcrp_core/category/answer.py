@@ -103,8 +103,9 @@ def answer(
     scale = 1.0 / k
     t = centre - scale * (R @ (c_g + model.unit * h.t))
     score = h.fitness
+    surface = evidence.both_ways(registrar.fitter, h, verifiers[j], pose_opts.inlier_distance)
     named = evidence.features(
-        registrar.evidence, h, registrar.averaged, float(dist[0]), viewpoint is None
+        registrar.evidence, surface, h, registrar.averaged, float(dist[0]), viewpoint is None
     )
     if evidence_out is not None:
         evidence_out.update(named)

@@ -28,7 +28,9 @@ object left out, also when it is that close to laying the object it answered wit
 (frames.py: a gallery whose objects disagree about which way is front defines the pose no better
 than that, and the answered object at the answered pose is what a user acts on); with the
 category left out, none is. Logistic regression on the answers' evidence (evidence.FEATURES)
-gives the probability that an answer is right.
+gives the probability that an answer is right, one regression for whole clouds and one for
+one-sided views (the same evidence means less on a view, whose right answers lack most of their
+object).
 """
 
 from __future__ import annotations
@@ -135,11 +137,11 @@ def answer_query(state: dict, item) -> list[tuple[dict, bool]]:
 
 def calibrate(model, n_jobs=None, progress=None, per_category: int = PER_CATEGORY):
     """
-    Return the Calibration of the model's category-level answers.
+    Return the SplitCalibration (whole clouds, views) of the model's category-level answers.
 
     Or None when its calibration answers are all right or all wrong (nothing to learn from).
     """
-    from pcrp_core.confidence import fit_calibration
+    from pcrp_core.confidence import fit_split_calibration
     from pcrp_core.parallel import parallel_map
 
     queries = calibration_queries(model, per_category)
@@ -150,4 +152,4 @@ def calibrate(model, n_jobs=None, progress=None, per_category: int = PER_CATEGOR
     X, y = [ev for ev, _ in samples], [right for _, right in samples]
     if len(set(y)) < 2:
         return None
-    return fit_calibration(X, y, FEATURES)
+    return fit_split_calibration(X, y, FEATURES, 'whole')

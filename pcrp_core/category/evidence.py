@@ -21,13 +21,17 @@ A right answer (right category, rotation within RIGHT_DEG) differs from a wrong 
 that registration can see. An object from outside the gallery fits no candidate well and its
 candidates disagree: about the category, and about which pose suits them. A turned answer (the
 half turn a near-symmetric object is confused by) fits its own candidate nearly as well as the
-right one, so the margin of the vote over the best other pose is small.
+right one, so the margin of the vote over the best other pose is small. An object from outside
+that does fit one candidate (a keyboard laid on a flat sofa) still lacks the parts the candidate
+has, and fits the candidate's relatives at that pose much worse: the fit the other way (the
+candidate's points far from the cloud) and the category's median fit say so.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from pcrp_core.category.vote import vote_scores, voting_candidates
+from pcrp_core.registration.icp import transform_batch
 
 FEATURES = (
     'fitness',
@@ -39,9 +43,17 @@ FEATURES = (
     'averaged',
     'retrieval_distance',
     'whole',
+    'fit_tight',
+    'missing',
+    'missing_far',
+    'category_fit',
+    'category_fit_ratio',
+    'runner_up',
 )
 RIGHT_DEG = 15.0  # an answer this close in rotation, and of the right category, is right
 NO_RIVAL = 1.0  # the pose margin when no other pose was voted on
+TIGHT = 0.4  # fit_tight counts query points within this share of the inlier distance
+FAR = 2.0  # missing_far counts gallery points farther than this many inlier distances
 
 
 def from_vote(ch: np.ndarray, groups, k: int, weight: float) -> dict:
@@ -52,7 +64,10 @@ def from_vote(ch: np.ndarray, groups, k: int, weight: float) -> dict:
     chosen one's score); agreement: the share of voting candidates whose own best hypothesis is the
     chosen one; candidate_ratio: the best candidate's fit of the chosen pose over the second best's
     (well under 1 when one candidate is the very object); category_share: the share of candidates
-    that vote (of the best-fitting candidate's category).
+    that vote (of the best-fitting candidate's category); category_fit: the voters' median fit of
+    the chosen pose, category_fit_ratio the same over the best fit (an object of the category fits
+    its relatives nearly as well as its closest one); runner_up: the best fit of any other pose on
+    any voter, over the chosen pose's best.
     """
     voters = voting_candidates(ch, groups)
     scores = vote_scores(ch, voters, weight)
@@ -61,33 +76,69 @@ def from_vote(ch: np.ndarray, groups, k: int, weight: float) -> dict:
     agreement = float(np.mean(np.argmin(ch[:, voters], axis=0) == k))
     fits = np.sort(ch[k])
     ratio = float(fits[0] / max(fits[1], 1e-12)) if len(fits) > 1 else 1.0
+    best = max(float(fits[0]), 1e-12)
+    median = float(np.median(ch[k, voters]))
+    rival = np.delete(ch, k, axis=0)[:, voters]
     return {
         'pose_margin': margin,
         'agreement': agreement,
         'candidate_ratio': ratio,
         'category_share': float(voters.mean()),
+        'category_fit': median,
+        'category_fit_ratio': median / best,
+        'runner_up': float(rival.min()) / best if rival.size else 1.0 + NO_RIVAL,
     }
 
 
-def alone() -> dict:
-    """Return the same when there was no vote (one candidate, or the vote switched off)."""
+def alone(chamfer: float = 0.0) -> dict:
+    """
+    Return the same when there was no vote (one candidate, or the vote switched off).
+
+    chamfer: the answer's own fit, all the category's fit there is.
+    """
     return {
         'pose_margin': NO_RIVAL,
         'agreement': 1.0,
         'candidate_ratio': 1.0,
         'category_share': 1.0,
+        'category_fit': float(chamfer),
+        'category_fit_ratio': 1.0,
+        'runner_up': 1.0 + NO_RIVAL,
     }
 
 
-def features(vote_evidence: dict, hyp, averaged: int, distance: float, whole: bool) -> dict:
+def both_ways(fitter, hyp, gallery, inlier_distance: float) -> dict:
+    """
+    How the posed query and the gallery object it answered with explain each other.
+
+    fit_tight: the share of the query's points within TIGHT inlier distances of the object (a right
+    pose of a relative fits many closely, a wrong object few); missing: the mean distance from the
+    object's points to the query, missing_far the share of them farther than FAR inlier distances
+    (what of the object the cloud lacks). One query of each tree, on the points scoring uses.
+    """
+    moved = transform_batch(fitter.src, hyp.R[None], hyp.t[None])[0]
+    ahead = gallery.tree.query(moved)[0]
+    own = gallery.points[:: max(1, len(gallery.points) // len(fitter.src))]
+    back = fitter.tree.query((own - hyp.t) @ hyp.R)[0]
+    return {
+        'fit_tight': float(np.mean(ahead < TIGHT * inlier_distance)),
+        'missing': float(back.mean()),
+        'missing_far': float(np.mean(back > FAR * inlier_distance)),
+    }
+
+
+def features(
+    vote_evidence: dict, surface: dict, hyp, averaged: int, distance: float, whole: bool
+) -> dict:
     """
     Return the named FEATURES of one answer.
 
-    hyp its final hypothesis, averaged how many candidates' poses it averages, distance the
-    retrieval distance of the first candidate.
+    surface: both_ways() of its final hypothesis hyp; averaged how many candidates' poses it
+    averages, distance the retrieval distance of the first candidate.
     """
     return {
         **vote_evidence,
+        **surface,
         'fitness': float(hyp.fitness),
         'chamfer': float(hyp.chamfer),
         'averaged': float(averaged),

@@ -129,7 +129,7 @@ class Registrar:
             )
             final = refinement.finish(fitter, final, verifiers[0])
             self.clock.lap('refinement')
-            self.evidence, self.averaged = evidence.alone(), 1
+            self.evidence, self.averaged = evidence.alone(final.chamfer), 1
             return 0, final
         k, votes, ch = vote(
             fitter, pool, verifiers, effort.vote_iterations, groups, effort.exact_ratio

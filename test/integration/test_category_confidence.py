@@ -34,10 +34,13 @@ def test_search_leaves_out_the_objects_it_is_told_to(small_model):
 def test_the_build_learns_a_confidence_that_is_stored_and_answers_report(small_model, tmp_path):
     model = PCRP.load(small_model)
     cal = model.category_calibration
-    assert cal is not None and cal.names == FEATURES and np.isfinite(cal.coef).all()
+    # a regression each for whole clouds and one-sided views, on every piece of evidence
+    assert cal is not None and cal.key == 'whole' and len(cal.parts) == 2
+    assert all(p.names == FEATURES and np.isfinite(p.coef).all() for p in cal.parts)
     model.save(tmp_path / 'again')
     again = PCRP.load(tmp_path / 'again')
-    np.testing.assert_array_equal(again.category_calibration.coef, cal.coef)
+    for mine, stored in zip(cal.parts, again.category_calibration.parts):
+        np.testing.assert_array_equal(stored.coef, mine.coef)
     points = modelnet('chair', 'test', 1)[0][0]
     R, t = random_pose(np.random.default_rng(3))
     r = model.estimate(points @ R.T + t)

@@ -117,12 +117,17 @@ def _add_category_calibration(path: Path, n_jobs: int | None, log=print) -> None
     """
     Models cached before builds calibrated the category-level path's confidence get it now.
 
-    As a build learns it (nothing else in them depends on it).
+    As a build learns it (nothing else in them depends on it); so do those whose calibration reads
+    other evidence than answers give now, or reads whole clouds and views alike.
     """
-    model = PCRP.load(path)
-    if model.category_calibration is not None:
-        return
     from pcrp_core.category.calibration import calibrate
+    from pcrp_core.category.evidence import FEATURES
+    from pcrp_core.confidence import SplitCalibration
+
+    model = PCRP.load(path)
+    cal = model.category_calibration
+    if isinstance(cal, SplitCalibration) and cal.names == FEATURES:
+        return
     log(f'calibrating the confidence of {path.name}')
     model.category_calibration = calibrate(model, n_jobs)
     model.save(path)

@@ -1,0 +1,63 @@
+# Copyright 2026 The pcrp authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The split calibration: a regression for each kind of answer, stored as plain arrays."""
+
+import numpy as np
+from pcrp_core.confidence import (
+    Calibration,
+    calibration_from_arrays,
+    fit_calibration,
+    fit_split_calibration,
+    SplitCalibration,
+)
+
+
+def opposite_kinds(n: int = 2000):
+    """Make evidence x meaning right for kind 0, wrong for kind 1: one regression reads neither."""
+    rng = np.random.default_rng(5)
+    x, kind = rng.normal(size=n), rng.random(n) < 0.5
+    right = rng.random(n) < 1 / (1 + np.exp(-3.0 * np.where(kind, -x, x)))
+    return [{'x': a, 'kind': float(k)} for a, k in zip(x, kind)], right
+
+
+def test_each_kind_of_answer_is_read_by_its_own_regression():
+    samples, right = opposite_kinds()
+    split = fit_split_calibration(samples, right, ('x',), 'kind')
+    assert split.probability({'x': 2.0, 'kind': 0.0}) > 0.9
+    assert split.probability({'x': 2.0, 'kind': 1.0}) < 0.1
+    pooled = fit_calibration(samples, right, ('x',))
+    assert 0.3 < pooled.probability({'x': 2.0, 'kind': 0.0}) < 0.7
+
+
+def test_a_kind_with_answers_all_right_falls_back_to_the_pooled_regression():
+    samples, right = opposite_kinds()
+    right = np.where([s['kind'] > 0.5 for s in samples], True, right)
+    split = fit_split_calibration(samples, right, ('x',), 'kind')
+    pooled = fit_calibration(samples, right, ('x',))
+    np.testing.assert_array_equal(split.parts[1].coef, pooled.coef)
+    assert not np.array_equal(split.parts[0].coef, pooled.coef)
+
+
+def test_calibrations_come_back_from_their_arrays_as_they_were_stored():
+    samples, right = opposite_kinds()
+    split = fit_split_calibration(samples, right, ('x',), 'kind')
+    again = calibration_from_arrays(split.to_arrays('c_'), 'c_')
+    assert isinstance(again, SplitCalibration) and again.names == ('x',)
+    for s in samples[:20]:
+        assert again.probability(s) == split.probability(s)
+    # a model stored before calibrations were split keeps its one regression
+    one = fit_calibration(samples, right, ('x',))
+    assert isinstance(calibration_from_arrays(one.to_arrays('c_'), 'c_'), Calibration)
+    assert calibration_from_arrays({}, 'c_') is None
