@@ -78,7 +78,7 @@ NOTES = """\
   gallery holds only relatives (the category-level tables), a right pose on a different instance
   fits less well: whole clouds keep most right answers (airplanes and cars read with their labels
   either way, as the confidence is learnt), but a one-sided view of a relative fits so much worse
-  that most right answers are refused with the wrong ones; most objects from other categories are
+  that many right answers are refused with the wrong ones; most objects from other categories are
   refused either way (the rejection and confidence tables). `min_confidence` moves the trade
   either way."""  # noqa: E501
 
