@@ -26,9 +26,9 @@ from pcrp_core.category.prepared import Prepared
 from pcrp_core.config import PoseOptions
 from pcrp_core.registration import fit_quality_batch, icp_batch
 from pcrp_core.registration.icp import transform_batch
+from pcrp_core.registration.nearest import NearestPoints
 from pcrp_core.registration.scoring import distances_back
 from pcrp_core.visibility import visible_from
-from scipy.spatial import cKDTree
 
 
 class Fitter:
@@ -54,8 +54,10 @@ class Fitter:
         self.coarse_src = src if len(src) <= opts.coarse_points else src[: opts.coarse_points]
         # the gallery's points are taken back into the query's frame to be matched
         # (scoring.distances_back)
-        self.tree = cKDTree(src)
-        self.coarse_tree = self.tree if self.coarse_src is src else cKDTree(self.coarse_src)
+        self.tree = NearestPoints(src)
+        self.coarse_tree = (
+            self.tree if self.coarse_src is src else NearestPoints(self.coarse_src)
+        )
 
     def refine(
         self, R, t, gallery: Prepared, iterations: int, source: str, coarse: bool = True
@@ -114,7 +116,7 @@ class Fitter:
             for n, source in enumerate(sources)
         ]
 
-    def _unexplained(self, tree: cKDTree, R, t, gallery: Prepared) -> float:
+    def _unexplained(self, tree: NearestPoints, R, t, gallery: Prepared) -> float:
         """
         Return the trimmed mean distance from the gallery points the sensor would see to the query.
 

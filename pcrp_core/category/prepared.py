@@ -24,8 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from pcrp_core.registration.nearest import NearestPoints
 from pcrp_core.symmetry import split_halves
-from scipy.spatial import cKDTree
 
 
 @dataclass
@@ -38,7 +38,7 @@ class Prepared:
     """
 
     points: np.ndarray
-    tree: cKDTree
+    tree: NearestPoints
     sampled: np.ndarray | None = None
     features: np.ndarray | None = None
     halves: np.ndarray | None = None
@@ -54,6 +54,6 @@ class Prepared:
 
 def prepare(points: np.ndarray, sampled_idx=None, features=None) -> Prepared:
     if sampled_idx is None:
-        return Prepared(points, cKDTree(points))
+        return Prepared(points, NearestPoints(points))
     sampled = points[sampled_idx]
-    return Prepared(points, cKDTree(points), sampled, features, split_halves(sampled))
+    return Prepared(points, NearestPoints(points), sampled, features, split_halves(sampled))

@@ -21,11 +21,11 @@ the segmenter, or parts in which two instances of a category differ do not pull 
 from __future__ import annotations
 
 import numpy as np
+from pcrp_core.registration.nearest import NearestPoints, Tree
 from pcrp_core.registration.procrustes import procrustes, procrustes_batch
-from scipy.spatial import cKDTree
 
 
-def icp(src: np.ndarray, dst: np.ndarray, dst_tree: cKDTree, R: np.ndarray, t: np.ndarray,
+def icp(src: np.ndarray, dst: np.ndarray, dst_tree: Tree, R: np.ndarray, t: np.ndarray,
         iterations: int = 20, trim: float = 0.8, tolerance: float = 1e-6):
     """Refined R, t with dst ≈ R @ src + t."""
     keep = max(3, int(trim * len(src)))
@@ -56,7 +56,7 @@ def transform_batch(src: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.ndarray
 def icp_batch(
     src: np.ndarray,
     dst: np.ndarray,
-    dst_tree: cKDTree,
+    dst_tree: Tree,
     R: np.ndarray,
     t: np.ndarray,
     iterations: int = 20,
@@ -104,7 +104,7 @@ def icp_batch(
 def icp_symmetric(
     src: np.ndarray,
     dst: np.ndarray,
-    dst_tree: cKDTree,
+    dst_tree: Tree,
     R: np.ndarray,
     t: np.ndarray,
     iterations: int = 20,
@@ -113,7 +113,7 @@ def icp_symmetric(
     reverse_points: int = 256,
     reverse_trim: float | None = None,
     dense_src: np.ndarray | None = None,
-    dense_tree: cKDTree | None = None,
+    dense_tree: Tree | None = None,
 ):
     """
     icp() with matches taken both ways.
@@ -136,7 +136,7 @@ def icp_symmetric(
     g = dst[:: max(1, len(dst) // reverse_points)]
     reverse_trim = trim if reverse_trim is None else reverse_trim
     keep_q, keep_g = max(3, int(trim * len(src))), max(3, int(reverse_trim * len(g)))
-    dense_tree = cKDTree(dense) if dense_tree is None else dense_tree
+    dense_tree = NearestPoints(dense) if dense_tree is None else dense_tree
     prev = np.inf
     for _ in range(iterations):
         moved = src @ R.T + t

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from pcrp_core.geometry import rotation_taking
 from pcrp_core.registration.icp import icp
-from scipy.spatial import cKDTree
+from pcrp_core.registration.nearest import Tree
 
 # the share of points whose mirror images are scored and matched: a few parts of a symmetric
 # object are not (a door handle on one side), and sampling leaves some images in gaps
@@ -51,7 +51,7 @@ class MirrorPlane:
     rms: float
 
 
-def spacing(points: np.ndarray, tree: cKDTree) -> float:
+def spacing(points: np.ndarray, tree: Tree) -> float:
     """Median distance from a point to its nearest neighbour."""
     return float(np.median(tree.query(points, 2)[0][:, 1]))
 
@@ -63,7 +63,7 @@ def trimmed_rms(dist: np.ndarray) -> float:
 
 
 def mirror_plane(
-    points: np.ndarray, tree: cKDTree, near: np.ndarray, iterations: int = 30
+    points: np.ndarray, tree: Tree, near: np.ndarray, iterations: int = 30
 ) -> MirrorPlane:
     """
     Return the mirror plane of a cloud found from the plane through its centroid normal to near.
@@ -87,7 +87,7 @@ def mirror_plane(
 
 
 def gallery_mirror(
-    points: np.ndarray, tree: cKDTree, tolerance: float, max_deg: float
+    points: np.ndarray, tree: Tree, tolerance: float, max_deg: float
 ) -> MirrorPlane | None:
     """
     Return a pre-aligned gallery object's mirror plane.

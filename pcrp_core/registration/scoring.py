@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import numpy as np
 from pcrp_core.registration.icp import transform_batch
-from scipy.spatial import cKDTree
+from pcrp_core.registration.nearest import Tree
 
 
-def fit_quality(aligned: np.ndarray, dst_tree: cKDTree, inlier_distance: float, trim: float = 0.9):
+def fit_quality(aligned: np.ndarray, dst_tree: Tree, inlier_distance: float, trim: float = 0.9):
     """
     (fitness, inlier_rmse, trimmed_chamfer) of query points already moved into the gallery frame.
 
@@ -38,7 +38,7 @@ def fit_quality(aligned: np.ndarray, dst_tree: cKDTree, inlier_distance: float, 
 
 
 def fit_quality_batch(
-    aligned: np.ndarray, dst_tree: cKDTree, inlier_distance: float, trim: float = 0.9
+    aligned: np.ndarray, dst_tree: Tree, inlier_distance: float, trim: float = 0.9
 ):
     """
     fit_quality() of many posed copies of the query at once.
@@ -57,7 +57,7 @@ def fit_quality_batch(
     return fitness, rmse, chamfer
 
 
-def mean_distance_batch(src: np.ndarray, Rs, ts, dst_tree: cKDTree) -> np.ndarray:
+def mean_distance_batch(src: np.ndarray, Rs, ts, dst_tree: Tree) -> np.ndarray:
     """
     (H,) untrimmed mean distance from src under each pose (R, t) to the points in dst_tree.
 
@@ -67,7 +67,7 @@ def mean_distance_batch(src: np.ndarray, Rs, ts, dst_tree: cKDTree) -> np.ndarra
     return dst_tree.query(moved.reshape(-1, 3))[0].reshape(len(moved), -1).mean(axis=1)
 
 
-def distances_back(src_tree: cKDTree, points: np.ndarray, Rs, ts) -> np.ndarray:
+def distances_back(src_tree: Tree, points: np.ndarray, Rs, ts) -> np.ndarray:
     """
     Return (H, m) distances from the m gallery points to the query points posed by each (R, t).
 

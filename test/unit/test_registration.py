@@ -17,15 +17,34 @@ Registration stages on known transforms.
 
 Procrustes, RANSAC, ICP, symmetry split, mirror planes.
 """
+import pickle
+
 from helpers import MODELNET, modelnet, random_pose, rotation_error_deg
 import numpy as np
 from pcrp_core.category.vote import choose
 from pcrp_core.registration import (fit_quality, icp, icp_symmetric, procrustes, procrustes_batch,
                                     ransac)
 from pcrp_core.registration.mirror import gallery_mirror, mirror_plane, MirrorPlane, snap
+from pcrp_core.registration.nearest import NearestPoints
 from pcrp_core.symmetry import split_halves, symmetry_axis
 import pytest
 from scipy.spatial import cKDTree
+
+
+def test_nearest_points_answer_as_a_kd_tree_does_and_survive_pickling():
+    rng = np.random.default_rng(4)
+    cloud, asked = rng.normal(size=(700, 3)), rng.normal(size=(300, 3)) * 1.5
+    mine, scipy_tree = NearestPoints(cloud), cKDTree(cloud)
+    for k in (1, 2):
+        d, i = mine.query(asked, k)
+        d_ref, i_ref = scipy_tree.query(asked, k)
+        np.testing.assert_allclose(d, d_ref, rtol=1e-12)
+        np.testing.assert_array_equal(i, i_ref)
+    # a cloud goes to worker processes pickled: its index is rebuilt there, not sent
+    again = pickle.loads(pickle.dumps(mine))
+    np.testing.assert_array_equal(again.query(asked)[1], i_ref[:, 0])
+    d, i = mine.query(np.zeros((0, 3)))
+    assert d.shape == i.shape == (0,)
 
 
 def test_procrustes_recovers_a_known_rigid_motion():
