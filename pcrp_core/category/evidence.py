@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 from pcrp_core.category.vote import vote_scores, voting_candidates
 from pcrp_core.registration.icp import transform_batch
+from pcrp_core.registration.scoring import distances_back
 
 FEATURES = (
     'fitness',
@@ -119,7 +120,7 @@ def both_ways(fitter, hyp, gallery, inlier_distance: float) -> dict:
     moved = transform_batch(fitter.src, hyp.R[None], hyp.t[None])[0]
     ahead = gallery.tree.query(moved)[0]
     own = gallery.points[:: max(1, len(gallery.points) // len(fitter.src))]
-    back = fitter.tree.query((own - hyp.t) @ hyp.R)[0]
+    back = distances_back(fitter.tree, own, [hyp.R], [hyp.t])[0]
     return {
         'fit_tight': float(np.mean(ahead < TIGHT * inlier_distance)),
         'missing': float(back.mean()),

@@ -31,7 +31,6 @@ class NearestPoints:
 
     def __init__(self, points: np.ndarray):
         self.points = np.ascontiguousarray(points, dtype=np.float64)
-        self.n = len(self.points)
         self._index = None
 
     def query(self, x: np.ndarray, k: int = 1) -> tuple[np.ndarray, np.ndarray]:
@@ -52,7 +51,7 @@ class NearestPoints:
         return (dist[:, 0], idx[:, 0]) if k == 1 else (dist, idx)
 
     def __getstate__(self) -> dict:
-        return {'points': self.points, 'n': self.n, '_index': None}
+        return {'points': self.points, '_index': None}
 
 
 # what registration queries: this index, or scipy's cKDTree where a caller (the build) has one
