@@ -67,11 +67,41 @@ def depth_image(msg, info) -> DepthImage:
         raise CloudFormatError('camera_info_mismatch', f'CameraInfo in frame '
                                                        f'{info.header.frame_id!r}, the image in '
                                                        f'{msg.header.frame_id!r}')
-    if (int(info.width), int(info.height)) not in ((0, 0), (int(msg.width), int(msg.height))):
-        raise CloudFormatError('camera_info_mismatch', f'CameraInfo of {info.width} x '
-                                                       f'{info.height}, the image {msg.width} x '
+    focal, centre, size = intrinsics(info)
+    if size is not None and size != (int(msg.width), int(msg.height)):
+        raise CloudFormatError('camera_info_mismatch', f'CameraInfo of {size[0]} x {size[1]} '
+                                                       f'(binning and region of interest '
+                                                       f'applied), the image {msg.width} x '
                                                        f'{msg.height}')
+    return DepthImage(depth_metres(msg), focal, centre)
+
+
+def intrinsics(info) -> tuple[np.ndarray, np.ndarray, tuple[int, int] | None]:
+    """
+    Return (focal, centre) in pixels of the image info describes, and its size (None: unset).
+
+    Read as ROS's image_geometry reads them for a rectified image (what depth_image_proc turns
+    into clouds): the projection matrix P, which is the rectified image's, not K, which is the raw
+    one's (they differ wherever the lens distorts); K only where P is unset. Then moved by the
+    region of interest and divided by the binning, as a driver that crops or bins its image says.
+    """
+    p = np.asarray(info.p, dtype=np.float64).reshape(-1)
     k = np.asarray(info.k, dtype=np.float64).reshape(-1)
-    if len(k) != 9 or not (k[0] > 0 and k[4] > 0):
-        raise CloudFormatError('camera_info_mismatch', 'CameraInfo K has no focal lengths')
-    return DepthImage(depth_metres(msg), np.array([k[0], k[4]]), np.array([k[2], k[5]]))
+    if len(p) == 12 and _focal_lengths(p[0], p[5]):
+        fx, fy, cx, cy = p[0], p[5], p[2], p[6]
+    elif len(k) == 9 and _focal_lengths(k[0], k[4]):
+        fx, fy, cx, cy = k[0], k[4], k[2], k[5]
+    else:
+        raise CloudFormatError('camera_info_mismatch', 'CameraInfo has no focal lengths in P or K')
+    bx, by = max(1, int(info.binning_x)), max(1, int(info.binning_y))
+    roi = info.roi
+    width, height = int(info.width), int(info.height)
+    if int(roi.width) > 0 and int(roi.height) > 0:
+        cx, cy = cx - int(roi.x_offset), cy - int(roi.y_offset)
+        width, height = int(roi.width), int(roi.height)
+    size = None if (width, height) == (0, 0) else (width // bx, height // by)
+    return np.array([fx / bx, fy / by]), np.array([cx / bx, cy / by]), size
+
+
+def _focal_lengths(fx: float, fy: float) -> bool:
+    return bool(np.isfinite(fx) and np.isfinite(fy) and fx > 0 and fy > 0)

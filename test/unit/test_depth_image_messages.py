@@ -17,7 +17,7 @@ import numpy as np
 from pcrp_ros.conversions import CloudFormatError
 from pcrp_ros.depth_images import camera_info_topic, depth_image, depth_metres
 import pytest
-from sensor_msgs.msg import CameraInfo, Image
+from sensor_msgs.msg import CameraInfo, Image, RegionOfInterest
 from std_msgs.msg import Header
 
 DEPTH_MM = np.array([[0, 500, 1000], [1500, 65535, 250]], dtype=np.uint16)
@@ -31,8 +31,9 @@ def _image(values: np.ndarray, encoding: str, big_endian=False, pad: int = 0, fr
                  step=raw.shape[1] * raw.itemsize + pad, data=b''.join(rows))
 
 
-def _info(frame='cam', size=(3, 2), k=(600.0, 0.0, 1.0, 0.0, 610.0, 0.5, 0.0, 0.0, 1.0)):
-    return CameraInfo(header=Header(frame_id=frame), width=size[0], height=size[1], k=list(k))
+def _info(frame='cam', size=(3, 2), k=(600.0, 0.0, 1.0, 0.0, 610.0, 0.5, 0.0, 0.0, 1.0), **more):
+    return CameraInfo(header=Header(frame_id=frame), width=size[0], height=size[1], k=list(k),
+                      **more)
 
 
 @pytest.mark.parametrize('big_endian', [False, True])
@@ -69,6 +70,24 @@ def test_the_camera_info_gives_the_intrinsics_and_must_fit_the_image():
         with pytest.raises(CloudFormatError) as e:
             depth_image(_image(DEPTH_MM, '16UC1'), info)
         assert e.value.reason == reason
+
+
+def test_a_rectified_image_takes_p_as_image_geometry_does_with_binning_and_roi():
+    # K is the raw (distorted) image's; a rectified image's own intrinsics are P's
+    p = [580.0, 0.0, 1.5, 0.0, 0.0, 590.0, 0.25, 0.0, 0.0, 0.0, 1.0, 0.0]
+    image = depth_image(_image(DEPTH_MM, '16UC1'), _info(p=p, d=[0.1, -0.2, 0.0, 0.0, 0.05]))
+    np.testing.assert_allclose(image.focal, [580.0, 590.0])
+    np.testing.assert_allclose(image.centre, [1.5, 0.25])
+    # the full sensor 12 x 8, a 6 x 4 window at (2, 4) read out binned by two: 3 x 2 pixels
+    windowed = _info(size=(12, 8), p=[580.0, 0.0, 5.0, 0.0, 0.0, 590.0, 7.0, 0.0, 0.0, 0.0, 1.0,
+                                      0.0], binning_x=2, binning_y=2,
+                     roi=RegionOfInterest(x_offset=2, y_offset=4, width=6, height=4))
+    image = depth_image(_image(DEPTH_MM, '16UC1'), windowed)
+    np.testing.assert_allclose(image.focal, [290.0, 295.0])
+    np.testing.assert_allclose(image.centre, [1.5, 1.5])
+    with pytest.raises(CloudFormatError) as e:
+        depth_image(_image(DEPTH_MM, '16UC1'), _info(size=(12, 8), p=windowed.p))
+    assert e.value.reason == 'camera_info_mismatch'
 
 
 def test_camera_info_sits_beside_its_image():
