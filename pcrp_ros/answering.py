@@ -77,6 +77,9 @@ RELOAD_WAIT = 600.0
 # were lost before they were taken (two topics at 10 Hz on the four-category model: 464 of 800
 # clouds received; 798 at 0.5 ms).
 GIL_SWITCH_INTERVAL_S = 0.0005
+# what an auto scene topic's publishers may send, and how often to look for them until one is seen
+SCENE_KINDS = {'sensor_msgs/msg/Image': 'depth_image', 'sensor_msgs/msg/PointCloud2': 'points'}
+SCENE_LOOKUP_S = 0.2
 
 
 class Waiting(NamedTuple):
@@ -110,6 +113,8 @@ class CloudAnswerer:
         self._subs = []
         self._scenes = Scenes(self.settings.scene_topic_of())
         self._scene_subs = []
+        self._scene_kinds = {}    # scene topic -> what it carries, once subscribed
+        self._scene_timer = None  # looks for the publishers of auto scene topics
         self._diag = None
         self._timer = None
         self._service = None
@@ -147,10 +152,7 @@ class CloudAnswerer:
     def activate(self) -> None:
         """Subscribe, create the publishers and /diagnostics, start answering."""
         s = self.settings
-        reliability = (ReliabilityPolicy.BEST_EFFORT if s.qos_reliability == 'best_effort'
-                       else ReliabilityPolicy.RELIABLE)
-        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=s.qos_depth,
-                         reliability=reliability, durability=qos_profile_sensor_data.durability)
+        qos = self._input_qos()
         out_qos = QoSProfile(depth=10)   # reliable: a planner must not miss a pose
         for topic in s.input_topics:
             # A group per topic: in one shared group the executor takes one cloud per wait and
@@ -175,18 +177,10 @@ class CloudAnswerer:
                 pass
             self._pubs[topic] = pubs
             self.stats.setdefault(topic, StreamStats())
-        images = s.scene_type == 'depth_image'
-        for scene_topic in dict.fromkeys(s.scene_topics):   # each once, in order
-            self._scene_subs.append(self.node.create_subscription(
-                Image if images else PointCloud2, scene_topic,
-                lambda msg, t=scene_topic: self._scenes.buffer.add(t, msg), qos,
-                callback_group=MutuallyExclusiveCallbackGroup()))
-            self._resolved[scene_topic] = self._scene_subs[-1].topic_name
-            if images:   # the camera's intrinsics, which drivers publish with each image
-                self._scene_subs.append(self.node.create_subscription(
-                    CameraInfo, camera_info_topic(self._resolved[scene_topic]),
-                    lambda msg, t=scene_topic: self._scenes.on_camera_info(t, msg),
-                    qos, callback_group=MutuallyExclusiveCallbackGroup()))
+        self._scene_kinds = {}
+        self._subscribe_scenes()
+        if len(self._scene_kinds) < len(set(s.scene_topics)):   # auto, no publisher seen yet
+            self._scene_timer = self.node.create_timer(SCENE_LOOKUP_S, self._subscribe_scenes)
         self._diag = self.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._timer = self.node.create_timer(1.0, self.publish_diagnostics)
         with self._cv:
@@ -221,6 +215,8 @@ class CloudAnswerer:
         for sub in self._subs + self._scene_subs:
             self.node.destroy_subscription(sub)
         self._subs, self._scene_subs = [], []
+        self._cancel_scene_timer()
+        self._scene_kinds = {}
         self._scenes.clear()
         for group in pubs.values():
             for pub in group.values():
@@ -538,6 +534,8 @@ class CloudAnswerer:
         scene, outcome, why = self._scenes.scene(topic, item.header, item.points, item.scene,
                                                  engine.model, viewpoint)
         if why is not None:
+            if outcome == 'missing' and self._scenes.topic_of[topic] not in self._scene_kinds:
+                why = 'no publisher of it seen yet (scene_type auto subscribes once there is one)'
             self._without_scene(topic, outcome, why)
         estimate = engine.estimators[k].estimate
         try:
@@ -555,7 +553,61 @@ class CloudAnswerer:
             if outcome is not None:
                 self.stats[topic].scene(outcome)
 
+    def _input_qos(self) -> QoSProfile:
+        s = self.settings
+        reliability = (ReliabilityPolicy.BEST_EFFORT if s.qos_reliability == 'best_effort'
+                       else ReliabilityPolicy.RELIABLE)
+        return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=s.qos_depth,
+                          reliability=reliability, durability=qos_profile_sensor_data.durability)
+
     # -- scenes -------------------------------------------------------------------------------
+    def _subscribe_scenes(self) -> None:
+        """
+        Subscribe each scene topic not yet subscribed whose message type is known.
+
+        Known from scene_type, or with auto from the topic's publishers: a depth image comes with
+        its CameraInfo beside it. The last call (a timer's, while any waits) cancels the timer.
+        """
+        qos = self._input_qos()
+        for scene_topic in dict.fromkeys(self.settings.scene_topics):   # each once, in order
+            if scene_topic in self._scene_kinds:
+                continue
+            kind = self._scene_kind(scene_topic)
+            if kind is None:
+                continue
+            self._scene_kinds[scene_topic] = kind
+            images = kind == 'depth_image'
+            self._scene_subs.append(self.node.create_subscription(
+                Image if images else PointCloud2, scene_topic,
+                lambda msg, t=scene_topic: self._scenes.buffer.add(t, msg), qos,
+                callback_group=MutuallyExclusiveCallbackGroup()))
+            self._resolved[scene_topic] = self._scene_subs[-1].topic_name
+            if images:   # the camera's intrinsics, which drivers publish with each image
+                self._scene_subs.append(self.node.create_subscription(
+                    CameraInfo, camera_info_topic(self._resolved[scene_topic]),
+                    lambda msg, t=scene_topic: self._scenes.on_camera_info(t, msg),
+                    qos, callback_group=MutuallyExclusiveCallbackGroup()))
+            self._log().info(f'scenes from {self._resolved[scene_topic]} ({kind})')
+        if len(self._scene_kinds) == len(set(self.settings.scene_topics)):
+            self._cancel_scene_timer()
+
+    def _scene_kind(self, scene_topic: str) -> str | None:
+        """Return points or depth_image for scene_topic, None while auto has no publisher."""
+        if self.settings.scene_type != 'auto':
+            return self.settings.scene_type
+        name = self.node.resolve_topic_name(scene_topic)
+        types = {info.topic_type for info in self.node.get_publishers_info_by_topic(name)}
+        kinds = [SCENE_KINDS[t] for t in sorted(types) if t in SCENE_KINDS]
+        if types and not kinds and self._due((scene_topic, 'scene_type')):
+            self._log().warning(f"scene topic {name} carries {', '.join(sorted(types))}; scenes "
+                                f"are {' or '.join(SCENE_KINDS)}")
+        return kinds[0] if kinds else None
+
+    def _cancel_scene_timer(self) -> None:
+        if self._scene_timer is not None:
+            self.node.destroy_timer(self._scene_timer)
+            self._scene_timer = None
+
     def _without_scene(self, topic: str, outcome: str, why: str) -> str:
         """Log why a cloud goes without its scene, once per kind per log_throttle_sec."""
         if self._due((topic, 'scene', outcome)):
@@ -566,9 +618,10 @@ class CloudAnswerer:
         return outcome
 
     def _scenes_text(self) -> str:
-        if not self._scene_subs:
-            return ''
-        return f" with scenes from {', '.join(sub.topic_name for sub in self._scene_subs)}"
+        names = [sub.topic_name for sub in self._scene_subs]
+        names += [f'{t} once published' for t in dict.fromkeys(self.settings.scene_topics)
+                  if t not in self._scene_kinds]
+        return f" with scenes from {', '.join(names)}" if names else ''
 
     # -- diagnostics --------------------------------------------------------------------------
     def _workers_text(self) -> str:

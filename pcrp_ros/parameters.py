@@ -48,11 +48,12 @@ class NodeSettings(Options):
         'frame, so surface of the object that something in front of it hid is not counted '
         'missing.', read_only=True)
     scene_type: str = setting(
-        'points', 'What scene_topics carry: points (PointCloud2 depth clouds) or depth_image '
+        'auto', 'What scene_topics carry: points (PointCloud2 depth clouds), depth_image '
         '(sensor_msgs/Image, rectified, 16UC1 millimetres or 32FC1 metres, with its CameraInfo on '
         'the camera_info topic beside it, as image_transport pairs them: e.g. '
-        '/camera/depth/image_rect_raw and /camera/depth/camera_info).',
-        choices=('points', 'depth_image'), read_only=True)
+        '/camera/depth/image_rect_raw and /camera/depth/camera_info), or auto: whichever of the '
+        "two each topic's publishers send (the topic is subscribed once a publisher is seen).",
+        choices=('auto', 'points', 'depth_image'), read_only=True)
     publish_aligned_model: bool = setting(
         True, "Publish T/aligned_model, the gallery object moved into the cloud's frame.")
     sensor_at_origin: bool = setting(

@@ -305,6 +305,7 @@ def test_worker_processes_are_sent_the_cropped_scene_and_use_it(model, view, mon
         node = PcrpNode(context=ctx, parameter_overrides=[
             Parameter('workers', value=2), Parameter('input_topics', value=[topic]),
             Parameter('scene_topics', value=[depth_topic]),
+            Parameter('scene_type', value='points'),   # told, not looked up
             Parameter('qos_reliability', value='reliable'),
             Parameter('min_confidence', value=0.0)])
         client = rclpy.create_node('scene_workers_client', context=ctx)
@@ -354,14 +355,11 @@ def test_depth_images_are_answered_with_their_camera_info_and_bad_ones_counted(v
     with ros_context() as ctx:
         node = PcrpNode(model=model, context=ctx, parameter_overrides=[
             Parameter('input_topics', value=[topic]),
-            Parameter('scene_topics', value=[depth_topic]),
-            Parameter('scene_type', value='depth_image'),
+            Parameter('scene_topics', value=[depth_topic]),   # scene_type auto: images
             Parameter('qos_reliability', value='reliable'),
             Parameter('min_confidence', value=0.0)])
         client = rclpy.create_node('scene_images_client', context=ctx)
         objects = client.create_publisher(PointCloud2, f'/{topic}', RELIABLE)
-        images = client.create_publisher(Image, f'/{depth_topic}', RELIABLE)
-        infos = client.create_publisher(CameraInfo, '/scene_images/depth/camera_info', RELIABLE)
         stats, scenes = node.stats[topic], node.answerer.scenes
 
         def send(sec, image, info=None):
@@ -376,8 +374,16 @@ def test_depth_images_are_answered_with_their_camera_info_and_bad_ones_counted(v
             return given[-1], stats.confidence[-1]
 
         with spinning(ctx, node, client):
-            assert wait_for(lambda: objects.get_subscription_count()
-                            and images.get_subscription_count()
+            # no camera yet, so no type to subscribe with: answered without a scene, and counted
+            assert wait_for(lambda: objects.get_subscription_count(), 10)
+            objects.publish(xyz_to_pointcloud2(view.points, _header(0)))
+            assert wait_for(lambda: stats.counts['answered'] == 1, 60), dict(stats.counts)
+            assert given[-1] is None and stats.snapshot()['scene_missing'] == 1
+            # the camera comes up: its image topic is subscribed as images, CameraInfo beside it
+            images = client.create_publisher(Image, f'/{depth_topic}', RELIABLE)
+            infos = client.create_publisher(
+                CameraInfo, '/scene_images/depth/camera_info', RELIABLE)
+            assert wait_for(lambda: images.get_subscription_count()
                             and infos.get_subscription_count(), 10)
             # no CameraInfo yet: answered without the image, and counted
             scene, without = send(1, _depth_image(view, _header(1)))
