@@ -147,14 +147,11 @@ class QueryOptions(Options):
         high=50,
     )
     n_matched: int = setting(
-        1,
-        'Of those, the first ones whose point features seed RANSAC hypotheses, for whole '
-        'clouds (only with the pose setting whole_features).',
+        2,
+        'Of those, the first ones whose point features seed RANSAC hypotheses (whole '
+        'clouds: only with the pose setting whole_features).',
         low=1,
         high=50,
-    )
-    n_matched_view: int = setting(
-        2, 'The same for clouds from a sensor.', low=1, high=50
     )
     n_candidates_view: int = setting(
         24,
@@ -264,13 +261,6 @@ class PoseOptions(Options):
         'n_matched first candidates (principal axes and half turns find the same '
         "poses, without the gallery's features).",
     )
-    seed_distinct_deg: float = setting(
-        15.0,
-        "Whole clouds: a candidate's starting rotations within this angle of one an earlier "
-        'candidate started from are not refined again (0: each refines all of its own).',
-        low=0.0,
-        high=180.0,
-    )
     pool_size: int = setting(6, 'Whole clouds: distinct rotations that go to the vote.', low=1)
     pool_size_view: int = setting(6, 'The same for clouds from a sensor.', low=1)
     reverse_weight: float = setting(
@@ -298,7 +288,7 @@ class PoseOptions(Options):
         1e-6, 'ICP stops once the trimmed mean squared error gains less.', low=0.0
     )
     final_ratio: float = setting(
-        1.5,
+        float('inf'),
         'Whole clouds: candidates whose fit in the vote is within this factor of the '
         'best are fully refined (the others do not end near the best).',
         low=1.0,
@@ -468,13 +458,7 @@ PAPER_POSE = PoseOptions(
     whole_features=True,
     reverse_weight=0.0,
 )
-PAPER_QUERY = {
-    'n_candidates': 1,
-    'n_candidates_view': 1,
-    'n_matched': 1,
-    'n_matched_view': 1,
-    'min_confidence': 0.0,
-}
+PAPER_QUERY = {'n_candidates': 1, 'n_candidates_view': 1, 'n_matched': 1, 'min_confidence': 0.0}
 
 
 def user_settings() -> list[dict[str, Any]]:

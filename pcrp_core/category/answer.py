@@ -88,11 +88,8 @@ def answer(
         up_pair,
     )
     top = [int(i) for i in idx[:n_candidates]]
-    # a gallery object's point features cost as much as the query's: whole clouds can do without
-    if viewpoint is not None:
-        n_matched = opts.n_matched_view
-    else:
-        n_matched = opts.n_matched if pose_opts.whole_features else 0
+    # a gallery object's point features cost as much as the query's: whole clouds do without them
+    n_matched = opts.n_matched if viewpoint is not None or pose_opts.whole_features else 0
     matched = [model.prepared.get(i, True, opts.cache_size) for i in top[:n_matched]]
     verifiers = matched + [model.prepared.get(i, False, opts.cache_size) for i in top[n_matched:]]
     j, h = registrar.best_pose(matched, verifiers, [model.gallery.categories[i] for i in top])

@@ -63,33 +63,3 @@ def distinct(hyps, n: int, min_angle_deg: float = 10.0) -> list[Hypothesis]:
         if len(kept) == n:
             break
     return kept
-
-
-class Started:
-    """
-    The rotations hypotheses were started from so far, to start each new one only once.
-
-    Pre-aligned candidates of one category have near-equal principal axes and features, so the
-    first candidates' starting rotations come back from every later one; refined again, they cost
-    most of the seeding and end where they ended before. within_deg 0 lets every one through.
-    """
-
-    def __init__(self, within_deg: float):
-        self.cos_min = np.cos(np.radians(within_deg)) if within_deg > 0 else None
-        self._rotations = np.zeros((0, 3, 3))
-
-    def new(self, found: list[tuple]) -> list[tuple]:
-        """
-        Return those of found, (R, t, ...) starts, not near one started before this call.
-
-        They are noted as started (near ones among themselves all pass: one candidate's own starts
-        are told apart by its ICP).
-        """
-        if self.cos_min is None or not found:
-            return list(found)
-        R = np.array([start[0] for start in found])
-        # cos of the angle between two rotations A, B: (trace(A B^T) - 1) / 2
-        cos = (np.einsum('nij,kij->nk', R, self._rotations) - 1) / 2
-        fresh = ~(cos > self.cos_min).any(axis=1)
-        self._rotations = np.concatenate([self._rotations, R[fresh]])
-        return [start for start, keep in zip(found, fresh) if keep]

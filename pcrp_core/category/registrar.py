@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from pcrp_core.category import evidence, refinement
 from pcrp_core.category.fitting import Fitter
-from pcrp_core.category.hypothesis import distinct, Hypothesis, Started
+from pcrp_core.category.hypothesis import distinct, Hypothesis
 from pcrp_core.category.prepared import Prepared
 from pcrp_core.category.seeding import seeds
 from pcrp_core.category.upright import UpPrior
@@ -52,8 +52,6 @@ class Effort:
         self.pool_size = opts.pool_size if whole else opts.pool_size_view
         self.vote_iterations = opts.vote_icp_iterations if whole else opts.vote_icp_iterations_view
         self.final_ratio = opts.final_ratio if whole else opts.final_ratio_view
-        # views: not measured, so every candidate refines all of its own starts
-        self.seed_distinct_deg = opts.seed_distinct_deg if whole else 0.0
         self.exact_ratio = opts.exact_ratio if whole else opts.exact_ratio_view
 
 
@@ -90,20 +88,19 @@ class Registrar:
     def upright(self, Rs) -> np.ndarray:
         return self.up.upright(Rs)
 
-    def seeds(self, gallery: Prepared, rank: int = 0, started: Started | None = None):
+    def seeds(self, gallery: Prepared, rank: int = 0) -> list[Hypothesis]:
         """Coarsely refined hypotheses for one gallery object (seeding.seeds)."""
-        started = Started(0.0) if started is None else started
-        return seeds(self.fitter, gallery, rank, self.up, self.rng, self.clock, started)
+        return seeds(self.fitter, gallery, rank, self.up, self.rng, self.clock)
 
     def pool(self, matched: list[Prepared], verifiers: list[Prepared]) -> list[Hypothesis]:
         """Return the distinct hypotheses that go to the vote, best first."""
         n_seed = (
             len(verifiers) if self.effort.seeders <= 0 else max(len(matched), self.effort.seeders)
         )
-        pool, started = [], Started(self.effort.seed_distinct_deg)
+        pool = []
         for rank, g in enumerate(verifiers[:n_seed]):
             pool += distinct(
-                sorted(self.seeds(g, rank, started), key=lambda h: h.chamfer), SEEDS_PER_CANDIDATE
+                sorted(self.seeds(g, rank), key=lambda h: h.chamfer), SEEDS_PER_CANDIDATE
             )
         # a seeder with no upright hypothesis hands back all of its own: drop those if others
         # have some

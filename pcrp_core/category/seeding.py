@@ -25,20 +25,15 @@ from __future__ import annotations
 
 from pcrp_core import hypotheses
 from pcrp_core.category.fitting import Fitter
-from pcrp_core.category.hypothesis import Hypothesis, Started
+from pcrp_core.category.hypothesis import Hypothesis
 from pcrp_core.category.prepared import Prepared
 from pcrp_core.category.upright import UpPrior
 
 
 def seeds(
-    fitter: Fitter, gallery: Prepared, rank: int, up: UpPrior, rng, clock, started: Started
+    fitter: Fitter, gallery: Prepared, rank: int, up: UpPrior, rng, clock
 ) -> list[Hypothesis]:
-    """
-    Coarsely refined hypotheses for one gallery object; rank: its place among the candidates.
-
-    Only those started from rotations not started before (started, shared by the candidates):
-    none when an earlier candidate started from all of them.
-    """
+    """Coarsely refined hypotheses for one gallery object; rank: its place among the candidates."""
     clock.lap('hypotheses')
     opts, query, viewpoint = fitter.opts, fitter.query, fitter.viewpoint
     upright = up.upright if up.known else None
@@ -72,20 +67,12 @@ def seeds(
             opts.pca_prefilter,
             upright,
         )
-    found = started.new(found)
-    if not found:
-        clock.lap('hypotheses')
-        return []
     Rs, ts, sources = zip(*found)
     hyps = fitter.refine_many(Rs, ts, gallery, iterations, sources)
     if opts.flips:
         best = min(up.keep(hyps), key=lambda h: h.chamfer)
-        turned = started.new(hypotheses.flips(best.R, best.t, gallery.points.mean(0)))
-        if turned:
-            Rs, ts = [R for R, _ in turned], [t for _, t in turned]
-            hyps += fitter.refine_many(
-                Rs, ts, gallery, iterations, [best.source + '+flip'] * len(Rs)
-            )
+        Rs, ts = zip(*hypotheses.flips(best.R, best.t, gallery.points.mean(0)))
+        hyps += fitter.refine_many(Rs, ts, gallery, iterations, [best.source + '+flip'] * len(Rs))
     if up.known and not up.upright([h.R for h in hyps]).any():
         # nothing upright from features or principal axes (a one-sided view's axes need not be
         # the object's): stand the query up and try it turned every way about the vertical

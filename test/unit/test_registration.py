@@ -21,7 +21,6 @@ import pickle
 
 from helpers import MODELNET, modelnet, random_pose, rotation_error_deg
 import numpy as np
-from pcrp_core.category.hypothesis import Started
 from pcrp_core.category.vote import choose
 from pcrp_core.registration import (fit_quality, icp, icp_symmetric, procrustes, procrustes_batch,
                                     ransac)
@@ -209,22 +208,6 @@ def test_vote_is_not_swayed_by_how_far_a_relative_is_from_the_query():
         changed += k != choose(np.hstack([close, far]), close_only, 0.5)
     # not a vote that ignores its voters: leaving the far relatives out does change answers
     assert changed > 20
-
-
-def test_a_start_is_refined_once_whatever_candidate_brings_it_again():
-    started, t = Started(15.0), np.zeros(3)
-    a, b = _turn([0, 0, 1], 0), _turn([0, 0, 1], 90)
-    # one candidate's own starts all pass, however near one another (its ICP tells them apart)
-    first = started.new([(a, t, 'pca'), (_turn([1, 0, 0], 5) @ a, t, 'pca'), (b, t, 'pca')])
-    assert [s for _, _, s in first] == ['pca'] * 3
-    # a later candidate's starts pass only where 15 degrees from all of those
-    later = started.new([(_turn([0, 1, 0], 12) @ a, t, 'near'),
-                         (_turn([0, 1, 0], 20) @ b, t, 'far'),
-                         (_turn([1, 1, 0], 180), t, 'turned')])
-    assert [s for _, _, s in later] == ['far', 'turned']
-    assert started.new([(_turn([0, 1, 0], 21) @ b, t, 'again')]) == []
-    # 0: every start of every candidate is refined
-    assert len(Started(0.0).new([(a, t, 'x'), (a, t, 'y')])) == 2
 
 
 def _turn(axis, deg):
