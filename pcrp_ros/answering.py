@@ -115,6 +115,7 @@ class CloudAnswerer:
         self._scene_subs = []
         self._scene_kinds = {}    # scene topic -> what it carries, once subscribed
         self._scene_timer = None  # looks for the publishers of auto scene topics
+        self._scene_lock = threading.Lock()   # the timer's subscribing against deactivate
         self._diag = None
         self._timer = None
         self._service = None
@@ -177,10 +178,11 @@ class CloudAnswerer:
                 pass
             self._pubs[topic] = pubs
             self.stats.setdefault(topic, StreamStats())
-        self._scene_kinds = {}
-        self._subscribe_scenes()
-        if len(self._scene_kinds) < len(set(s.scene_topics)):   # auto, no publisher seen yet
-            self._scene_timer = self.node.create_timer(SCENE_LOOKUP_S, self._subscribe_scenes)
+        with self._scene_lock:
+            self._scene_kinds = {}
+            self._subscribe_scenes_known()
+            if len(self._scene_kinds) < len(set(s.scene_topics)):   # auto, no publisher yet
+                self._scene_timer = self.node.create_timer(SCENE_LOOKUP_S, self._subscribe_scenes)
         self._diag = self.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._timer = self.node.create_timer(1.0, self.publish_diagnostics)
         with self._cv:
@@ -212,11 +214,12 @@ class CloudAnswerer:
             t.join(timeout=60.0)
         self._threads = []
         pubs, self._pubs = self._pubs, {}
-        for sub in self._subs + self._scene_subs:
-            self.node.destroy_subscription(sub)
-        self._subs, self._scene_subs = [], []
-        self._cancel_scene_timer()
-        self._scene_kinds = {}
+        with self._scene_lock:
+            for sub in self._subs + self._scene_subs:
+                self.node.destroy_subscription(sub)
+            self._subs, self._scene_subs = [], []
+            self._cancel_scene_timer()
+            self._scene_kinds = {}
         self._scenes.clear()
         for group in pubs.values():
             for pub in group.values():
@@ -562,11 +565,17 @@ class CloudAnswerer:
 
     # -- scenes -------------------------------------------------------------------------------
     def _subscribe_scenes(self) -> None:
+        """Look for the publishers of scene topics still waiting (the timer's call)."""
+        with self._scene_lock:
+            if self._scene_timer is not None:   # else deactivated since the timer fired
+                self._subscribe_scenes_known()
+
+    def _subscribe_scenes_known(self) -> None:
         """
         Subscribe each scene topic not yet subscribed whose message type is known.
 
         Known from scene_type, or with auto from the topic's publishers: a depth image comes with
-        its CameraInfo beside it. The last call (a timer's, while any waits) cancels the timer.
+        its CameraInfo beside it. Once every one is, the timer looking for them is cancelled.
         """
         qos = self._input_qos()
         for scene_topic in dict.fromkeys(self.settings.scene_topics):   # each once, in order
