@@ -181,7 +181,7 @@ class CloudAnswerer:
         with self._scene_lock:
             self._scene_kinds = {}
             self._subscribe_scenes_known()
-            if len(self._scene_kinds) < len(set(s.scene_topics)):   # auto, no publisher yet
+            if self._waiting_scenes():   # auto, no publisher seen yet
                 self._scene_timer = self.node.create_timer(SCENE_LOOKUP_S, self._subscribe_scenes)
         self._diag = self.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._timer = self.node.create_timer(1.0, self.publish_diagnostics)
@@ -578,9 +578,7 @@ class CloudAnswerer:
         its CameraInfo beside it. Once every one is, the timer looking for them is cancelled.
         """
         qos = self._input_qos()
-        for scene_topic in dict.fromkeys(self.settings.scene_topics):   # each once, in order
-            if scene_topic in self._scene_kinds:
-                continue
+        for scene_topic in self._waiting_scenes():
             kind = self._scene_kind(scene_topic)
             if kind is None:
                 continue
@@ -597,8 +595,12 @@ class CloudAnswerer:
                     lambda msg, t=scene_topic: self._scenes.on_camera_info(t, msg),
                     qos, callback_group=MutuallyExclusiveCallbackGroup()))
             self._log().info(f'scenes from {self._resolved[scene_topic]} ({kind})')
-        if len(self._scene_kinds) == len(set(self.settings.scene_topics)):
+        if not self._waiting_scenes():
             self._cancel_scene_timer()
+
+    def _waiting_scenes(self) -> list[str]:
+        """Return the scene topics not subscribed yet, each once, in order."""
+        return [t for t in dict.fromkeys(self.settings.scene_topics) if t not in self._scene_kinds]
 
     def _scene_kind(self, scene_topic: str) -> str | None:
         """Return points or depth_image for scene_topic, None while auto has no publisher."""
@@ -628,8 +630,7 @@ class CloudAnswerer:
 
     def _scenes_text(self) -> str:
         names = [sub.topic_name for sub in self._scene_subs]
-        names += [f'{t} once published' for t in dict.fromkeys(self.settings.scene_topics)
-                  if t not in self._scene_kinds]
+        names += [f'{t} once published' for t in self._waiting_scenes()]
         return f" with scenes from {', '.join(names)}" if names else ''
 
     # -- diagnostics --------------------------------------------------------------------------
