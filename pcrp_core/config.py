@@ -404,6 +404,13 @@ class InstanceOptions(Options):
         'never.',
         low=0.0,
     )
+    local_shape_cost_hidden: float = setting(
+        0.25,
+        'The same for an answer the scene shows partly hidden (a tenth or more of the surface it '
+        'would show lies behind something nearer): that surface is excused, so a poor fit costs '
+        'less, and the view hypotheses saw a cut silhouette.',
+        low=0.0,
+    )
     local_shape_objects: int = setting(
         12, "Objects looked for then: those whose views have the cloud's shape, nearest first.",
         low=1,

@@ -26,8 +26,9 @@ Which known object a camera's cloud shows, and its pose: the steps of the instan
 5. Half turns: the answer turned half about each of its object's axes, refined and judged too,
    since a nearly symmetric object is often answered turned (best_half_turn).
 6. Local shape: an answer that still fits poorly (an object partly hidden: its visible centroid
-   and silhouette misled step 2) has the objects nearest the cloud's shape placed again from
-   FPFH matches in RANSAC (local_shape.py), refined and judged alike (from_local_shape).
+   and silhouette misled step 2), or, given the scene, is partly hidden and fits less than well
+   (looks_again), has the objects nearest the cloud's shape placed again from FPFH matches in
+   RANSAC (local_shape.py), refined and judged alike (from_local_shape).
 """
 from __future__ import annotations
 
@@ -42,6 +43,23 @@ from pcrp_core.instance.verification import Fit, judge, query_surface, Surface, 
 from pcrp_core.registration.icp import icp_point_to_plane
 from pcrp_core.timing import Clock
 from scipy.spatial import cKDTree
+
+
+# an answer whose expected surface the scene shows hidden this much is partly hidden: its view
+# hypotheses came from a cut silhouette and a shifted centroid
+PARTLY_HIDDEN = 0.1
+
+
+def looks_again(fit: Fit, opts) -> bool:
+    """
+    Whether an answer fits poorly enough to be looked for again by local shape (step 6).
+
+    Its cost over local_shape_cost, or, partly hidden behind what the scene shows, over
+    local_shape_cost_hidden: its hidden surface costs it nothing, so the same misfit costs less.
+    """
+    if fit.cost > opts.local_shape_cost:
+        return True
+    return fit.hidden_share >= PARTLY_HIDDEN and fit.cost > opts.local_shape_cost_hidden
 
 
 @dataclass
@@ -283,7 +301,7 @@ class InstanceMatcher:
             )
             clock.lap('verification')
         before = order[0].fit.cost
-        if before > opts.local_shape_cost:
+        if looks_again(order[0].fit, opts):
             # by shape again, further down than the shortlist: a hidden part shrinks the view,
             # and the right object then ranks a little lower than when seen whole
             objects = self.shortlist(shape, opts, exclude, opts.local_shape_objects)

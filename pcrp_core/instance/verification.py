@@ -113,6 +113,12 @@ class Fit:
     n_expected: int
     median_off: float = 0.0       # median distance of the cloud's points to the object
     median_missing: float = 0.0   # median distance of the expected surface points to the cloud
+    n_hidden: int = 0             # expected surface points the scene shows hidden, not counted
+
+    @property
+    def hidden_share(self) -> float:
+        """Share of the surface the camera would see under the pose that the scene hid."""
+        return self.n_hidden / max(self.n_expected + self.n_hidden, 1)
 
 
 def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray, t: np.ndarray,
@@ -127,8 +133,10 @@ def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray,
     """
     to_object = distances((query.points - t) @ R, surface)
     shown = surface.points[expected] @ R.T + t
+    n_hidden = 0
     if query.occluders is not None and len(expected):
         keep = ~hidden(shown, query.occluders, tau)
+        n_hidden = int(len(keep) - keep.sum())
         expected, shown = expected[keep], shown[keep]
     if len(expected):
         to_query = distances(shown, query)
@@ -140,4 +148,4 @@ def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray,
     rms = float(np.sqrt(np.mean(to_object[inside] ** 2))) if inside.any() else float(tau)
     return Fit(unexplained + unshown_weight * unshown, unexplained, unshown, float(inside.mean()),
                float(np.mean(to_query < tau)), rms, len(expected), float(np.median(to_object)),
-               float(np.median(to_query)))
+               float(np.median(to_query)), n_hidden)

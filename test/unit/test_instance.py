@@ -13,6 +13,7 @@
 # limitations under the License.
 
 """Known objects from a camera (pcrp_core/instance): each step on shapes whose answer is known."""
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -21,13 +22,13 @@ from pcrp_core.confidence import expected_calibration_error, fit_calibration, re
 from pcrp_core.config import InstanceOptions
 from pcrp_core.geometry import rotation_angle_deg, rotation_taking
 from pcrp_core.instance import hypotheses, local_shape
-from pcrp_core.instance.matcher import Candidate, InstanceMatcher
+from pcrp_core.instance.matcher import Candidate, InstanceMatcher, looks_again
 from pcrp_core.instance.shape_index import ShapeIndex
 from pcrp_core.instance.signatures import ray_frame, SECTORS, shift_costs, signature
 from pcrp_core.instance.templates import (
     extent, object_templates, stack, Templates, TemplateSettings
 )
-from pcrp_core.instance.verification import (distances, judge, query_surface, Surface,
+from pcrp_core.instance.verification import (distances, Fit, judge, query_surface, Surface,
                                              visible_points)
 from pcrp_core.sources.camera import look_at, Mesh, MeshCamera
 from pcrp_core.sources.household import union
@@ -330,6 +331,32 @@ def test_local_shape_is_looked_for_only_when_the_answer_fits_worse_than_its_cost
         matcher.match(points, InstanceOptions(local_shape_cost=cost), timings=timings)
         ran[cost] = 'local_shape' in timings
     assert ran == {0.0: True, float('inf'): False}
+
+
+def test_a_partly_hidden_answer_is_looked_for_again_at_the_lower_cost():
+    opts = InstanceOptions(local_shape_cost=0.5, local_shape_cost_hidden=0.25)
+    fit = Fit(0.3, 0.1, 0.2, 0.9, 0.8, 0.001, n_expected=80)
+    assert not looks_again(fit, opts)                                  # seen whole, fits well
+    assert looks_again(replace(fit, n_hidden=20), opts)                # a fifth hidden
+    assert not looks_again(replace(fit, n_hidden=5), opts)             # barely hidden
+    assert not looks_again(replace(fit, cost=0.2, n_hidden=20), opts)  # hidden, fits well
+    assert looks_again(replace(fit, cost=0.6), opts)                   # fits poorly either way
+
+
+def test_a_scene_hiding_part_of_the_answer_has_it_looked_for_again(hidden_egg):
+    tpl, _, _, points = hidden_egg
+    # a wall in front of the egg's cut-off side: the rays beyond the kept points' edge
+    edge = float((points[:, 0] / points[:, 2]).max())
+    x, y = np.meshgrid(np.arange(edge + 0.002, edge + 0.3, 0.002), np.arange(-0.3, 0.3, 0.002))
+    wall = 0.3 * np.column_stack([x.ravel(), y.ravel(), np.ones(x.size)])
+    opts = InstanceOptions(local_shape_cost=float('inf'), local_shape_cost_hidden=0.0)
+    ran = {}
+    for name, scene in (('blind', None), ('seeing', np.vstack([wall, points]))):
+        timings = {}
+        with one_open3d_thread():
+            InstanceMatcher(tpl).match(points, opts, timings=timings, scene=scene)
+        ran[name] = 'local_shape' in timings
+    assert ran == {'blind': False, 'seeing': True}
 
 
 def test_a_views_extent_bounds_its_objects_diameter_from_below_whatever_strays_in():

@@ -93,3 +93,12 @@ def test_an_occluder_does_not_excuse_a_smaller_object(hidden_brick):
     right = _judge(tpl, R, t, cloud, wall)
     smaller = _judge(tpl, R, t, cloud, wall, scale=0.8)
     assert smaller.cost > 3 * right.cost
+
+
+def test_the_fit_counts_the_surface_its_occluder_hid(hidden_brick):
+    tpl, R, t, cloud, wall = hidden_brick
+    blind = _judge(tpl, R, t, cloud, None)
+    seeing = _judge(tpl, R, t, cloud, np.vstack([wall, cloud]))
+    assert blind.n_hidden == 0 and blind.hidden_share == 0.0
+    assert seeing.n_expected + seeing.n_hidden == blind.n_expected
+    assert 0.2 < seeing.hidden_share < 0.5     # a third of the brick's view lies behind the wall
