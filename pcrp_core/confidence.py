@@ -130,17 +130,14 @@ def fit_split_calibration(
     """
     y = np.asarray(labels, dtype=bool)
     kind = np.array([s[key] >= 0.5 for s in samples], dtype=bool)
-    pooled = fit_calibration(samples, y, names, regularisation)
     parts = []
     for value in (False, True):
         mine = kind == value
-        parts.append(
-            fit_calibration(
-                [s for s, m in zip(samples, mine) if m], y[mine], names, regularisation
-            )
-            if 0 < y[mine].sum() < mine.sum()
-            else pooled
-        )
+        if 0 < y[mine].sum() < mine.sum():
+            mine_samples = [s for s, m in zip(samples, mine) if m]
+            parts.append(fit_calibration(mine_samples, y[mine], names, regularisation))
+        else:   # nothing to tell apart within the kind: what all samples say
+            parts.append(fit_calibration(samples, y, names, regularisation))
     return SplitCalibration(key, tuple(parts))
 
 
