@@ -16,7 +16,7 @@
 import subprocess
 import sys
 
-from helpers import PROCEDURAL_MODEL
+from helpers import hidden_cone, PROCEDURAL_MODEL, SURER
 import numpy as np
 from pcrp_core import PCRP
 from pcrp_ros.bag_commands import make_bag, process_bag, summary
@@ -127,13 +127,9 @@ def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path
 
 
 def test_process_answers_each_cloud_with_the_depth_cloud_of_its_stamp(tmp_path):
-    from pcrp_core.evaluation.scenes import sample_scene
-    from pcrp_core.sources import load_source
     from pcrp_ros.bags import BagWriter, cloud_msg, header
 
-    # the shipped gallery's cone, a quarter hidden; its depth cloud holds the occluder too
-    cone = next(o for o in load_source('household', split='train') if o.gallery_id == 'cone')
-    view = sample_scene(cone.mesh, 'cone', 14, 1, 'free', occlusion=True, seed=1)
+    view = hidden_cone()   # its depth cloud holds the occluder too
     depth = np.concatenate([view.points, view.occluder, np.full((20, 3), np.nan)])
     bag = tmp_path / 'scenes'
     with BagWriter(bag) as w:
@@ -146,7 +142,7 @@ def test_process_answers_each_cloud_with_the_depth_cloud_of_its_stamp(tmp_path):
     # the depth topic is read as scenes only, never answered as an object
     assert [(r['topic'], r['scene']) for r in rows] == [('object', 'used'), ('object', 'missing')]
     assert rows[0]['gallery_id'] == rows[1]['gallery_id'] == 'cone'
-    assert rows[0]['confidence'] > rows[1]['confidence'] + 0.2
+    assert rows[0]['confidence'] > rows[1]['confidence'] + SURER
     assert 'scenes: used 1, missing 1' in summary(rows)
     out = _process_command(bag, tmp_path / 'cli', '--scene-topic', 'nothing/here')
     assert out.returncode == 0 and 'no depth clouds or images on the scene topic nothing/here' \
@@ -154,12 +150,9 @@ def test_process_answers_each_cloud_with_the_depth_cloud_of_its_stamp(tmp_path):
 
 
 def test_process_reads_depth_images_with_the_camera_info_recorded_beside_them(tmp_path):
-    from pcrp_core.evaluation.scenes import sample_scene
-    from pcrp_core.sources import load_source
     from pcrp_ros.bags import BagWriter, cloud_msg, header, T
 
-    cone = next(o for o in load_source('household', split='train') if o.gallery_id == 'cone')
-    view = sample_scene(cone.mesh, 'cone', 14, 1, 'free', occlusion=True, seed=1)
+    view = hidden_cone()
     image, cam = view.depth_image(), view.camera
     mm = np.rint(np.where(np.isfinite(image.z), image.z, 0.0) * 1000).astype('<u2')
 
@@ -187,4 +180,4 @@ def test_process_reads_depth_images_with_the_camera_info_recorded_beside_them(tm
         ('object', 'rejected_no_camera_info'), ('object', 'used')]
     assert 'scenes: used 1, rejected_no_camera_info 1' in summary(rows)
     assert rows[0]['gallery_id'] == rows[1]['gallery_id'] == 'cone'
-    assert rows[1]['confidence'] > rows[0]['confidence'] + 0.2
+    assert rows[1]['confidence'] > rows[0]['confidence'] + SURER
