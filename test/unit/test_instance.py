@@ -34,6 +34,7 @@ from pcrp_core.sources.camera import look_at, Mesh, MeshCamera
 from pcrp_core.sources.household import union
 from pcrp_core.threads import one_open3d_thread
 import pytest
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 SMALL = TemplateSettings(views=16, visibility_directions=128, surface_points=512, view_points=256)
@@ -320,6 +321,38 @@ def test_local_shape_places_a_partly_hidden_object_that_was_answered_wrongly(hid
     assert rotation_angle_deg(best.R, R) < 3.0
     c = tpl.centre[0]
     assert np.linalg.norm(best.t + best.R @ c - (t + R @ c)) < 0.003
+
+
+def _described(features: np.ndarray) -> local_shape.LocalShape:
+    return local_shape.LocalShape(o3d.geometry.PointCloud(), features, (features ** 2).sum(1))
+
+
+def test_local_shape_matches_are_the_features_mutual_nearest_both_ways():
+    rng = np.random.default_rng(3)
+    cloud, obj = rng.uniform(0, 100, (60, 33)), rng.uniform(0, 100, (400, 33))
+    obj[::7][:40] = cloud[:40] + rng.normal(scale=1.0, size=(40, 33))    # 40 surely mutual
+    pairs = local_shape.matches(_described(cloud), _described(obj))
+    nearest = cKDTree(obj).query(cloud)[1]
+    back = cKDTree(cloud).query(obj)[1]
+    mutual = [(i, j) for i, j in enumerate(nearest) if back[j] == i]
+    assert len(mutual) >= 40 and pairs.tolist() == [list(m) for m in mutual]
+
+
+def test_local_shape_keeps_every_nearest_match_when_too_few_are_mutual():
+    # every cloud point is nearest one object point, which is nearest only one of them: RANSAC
+    # would have one match to draw from, so it gets all of them, as Open3D's matcher gives
+    rng = np.random.default_rng(4)
+    obj = np.vstack([np.full((1, 33), 50.0), rng.uniform(200, 300, (100, 33))])
+    cloud = 50.0 + rng.normal(scale=1.0, size=(30, 33))
+    pairs = local_shape.matches(_described(cloud), _described(obj))
+    assert pairs.tolist() == [[i, 0] for i in range(30)]
+
+
+def test_local_shape_of_nothing_matches_nothing_and_poses_nothing():
+    empty, some = _described(np.zeros((0, 33))), _described(np.ones((5, 33)))
+    assert local_shape.matches(empty, some).shape == (0, 2)
+    R, t = local_shape.pose(empty, some, 0.0075, 100, seed=0)
+    assert np.array_equal(R, np.eye(3)) and np.array_equal(t, np.zeros(3))
 
 
 def test_local_shape_is_looked_for_only_when_the_answer_fits_worse_than_its_cost(hidden_egg):
