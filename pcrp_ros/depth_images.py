@@ -38,7 +38,12 @@ def camera_info_topic(image_topic: str) -> str:
 
 
 def depth_metres(msg) -> np.ndarray:
-    """Return a depth image's depth in metres, (height, width) float32, inf where none."""
+    """
+    Return a depth image's depth in metres, (height, width) float32.
+
+    As sent: 0 or NaN where none, which DepthImage reads as no measurement (it cleans every image
+    it is given, so a frame is not passed over twice here).
+    """
     if msg.encoding not in ENCODINGS:
         raise CloudFormatError('bad_encoding', f'depth image encoded {msg.encoding!r}; expected '
                                                f"one of {', '.join(ENCODINGS)}")
@@ -53,10 +58,7 @@ def depth_metres(msg) -> np.ndarray:
         raise CloudFormatError('truncated_data', f'data has {len(buf)} bytes, step {step} x '
                                                  f'height {height} needs {step * height}')
     raw = np.ndarray((height, width), dtype=dtype, buffer=buf, strides=(step, dtype.itemsize))
-    z = raw.astype(np.float32) * np.float32(scale)
-    with np.errstate(invalid='ignore'):
-        z[~(z > 0) | ~np.isfinite(z)] = np.inf
-    return z
+    return raw.astype(np.float32) * np.float32(scale)
 
 
 def depth_image(msg, info) -> DepthImage:

@@ -40,13 +40,12 @@ def _info(frame='cam', size=(3, 2), k=(600.0, 0.0, 1.0, 0.0, 610.0, 0.5, 0.0, 0.
 @pytest.mark.parametrize('pad', [0, 6])
 def test_millimetres_and_metres_read_as_metres_with_no_depth_as_inf(big_endian, pad):
     expected = np.where(DEPTH_MM > 0, DEPTH_MM / 1000.0, np.inf)
-    mm = depth_metres(_image(DEPTH_MM, '16UC1', big_endian, pad))
-    np.testing.assert_allclose(mm, expected, rtol=1e-6)
     metres = DEPTH_MM / 1000.0
     metres[0, 0] = np.nan
-    np.testing.assert_allclose(
-        depth_metres(_image(metres.astype(np.float32), '32FC1', big_endian, pad)), expected,
-        rtol=1e-6)
+    for msg in (_image(DEPTH_MM, '16UC1', big_endian, pad),
+                _image(metres.astype(np.float32), '32FC1', big_endian, pad)):
+        np.testing.assert_allclose(depth_metres(msg)[1], expected[1], rtol=1e-6)
+        np.testing.assert_allclose(depth_image(msg, _info()).z, expected, rtol=1e-6)
 
 
 @pytest.mark.parametrize('msg, reason', [
