@@ -32,7 +32,9 @@ import numpy as np
 from pcrp_core.errors import ModelError
 
 FORMAT = 'pcrp-model'
-FORMAT_VERSION = 1
+# 2: a view calibration may be boosted trees, which version 1's readers would silently drop
+FORMAT_VERSION = 2
+READS = (1, 2)
 META_FILE = 'model.json'
 ARRAYS_FILE = 'arrays.npz'
 
@@ -50,8 +52,9 @@ def write_model(path, meta: dict, arrays: dict) -> Path:
     path.mkdir(parents=True, exist_ok=True)
     arrays_path = path / ARRAYS_FILE
     np.savez_compressed(arrays_path, **arrays)
-    meta = {'format': FORMAT, 'format_version': FORMAT_VERSION, **meta,
-            'arrays_sha256': _sha256(arrays_path)}
+    meta = {'format': FORMAT, 'format_version': FORMAT_VERSION, **meta}
+    # the format this code writes, whatever a model read from an older file says it had
+    meta.update(format=FORMAT, format_version=FORMAT_VERSION, arrays_sha256=_sha256(arrays_path))
     (path / META_FILE).write_text(json.dumps(meta, indent=1))
     return path
 
@@ -79,10 +82,11 @@ def read_model(path) -> tuple[dict, dict]:
             f'{meta_path}: not a pcrp model (format field is '
             f"{meta.get('format') if isinstance(meta, dict) else None!r})"
         )
-    if meta.get('format_version') != FORMAT_VERSION:
+    if meta.get('format_version') not in READS:
         raise ModelError(
             f"{meta_path}: model format version {meta.get('format_version')!r}, "
-            f'this pcrp reads version {FORMAT_VERSION}; rebuild the model with `pcrp build`'
+            f"this pcrp reads versions {', '.join(map(str, READS))}; rebuild the model with "
+            '`pcrp build`'
         )
     if _sha256(arrays_path) != meta.get('arrays_sha256'):
         raise ModelError(

@@ -29,7 +29,12 @@ import warnings
 
 import numpy as np
 from pcrp_core import model_io
-from pcrp_core.confidence import Calibration, calibration_from_arrays, SplitCalibration
+from pcrp_core.confidence import (
+    BoostedCalibration,
+    Calibration,
+    calibration_from_arrays,
+    SplitCalibration,
+)
 from pcrp_core.config import InstanceOptions, PoseOptions, QueryOptions, USER_POSE_SETTINGS
 from pcrp_core.errors import ModelError
 from pcrp_core.features import PointHop
@@ -75,7 +80,7 @@ class PCRP:
         meta: dict | None = None,
         n_points: int = 1024,
         templates: Templates | None = None,
-        view_calibration: Calibration | None = None,
+        view_calibration: Calibration | BoostedCalibration | None = None,
         category_calibration: Calibration | SplitCalibration | None = None,
     ):
         # a process told OMP_NUM_THREADS=1 (a worker, a benchmark) means Open3D too (threads.py)
@@ -297,7 +302,7 @@ class PCRP:
             if templates is not None and len(templates) != len(gallery):
                 raise ValueError('camera templates do not match the gallery')
             model = cls(pointhop, vlad, gallery, meta['unit'], meta, meta['n_points'], templates,
-                        Calibration.from_arrays(arrays, VIEW_CALIBRATION),
+                        calibration_from_arrays(arrays, VIEW_CALIBRATION),
                         calibration_from_arrays(arrays, CATEGORY_CALIBRATION))
         except (KeyError, TypeError, ValueError) as e:
             raise ModelError(

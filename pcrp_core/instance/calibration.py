@@ -36,8 +36,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 CALIBRATION_SEED = 2_000_003
-# views answered for calibration, in all: enough for a logistic regression of a dozen features
-# whatever the gallery's size, so each object of a small gallery gets more (at most 12 per kind)
+# views answered for calibration, in all: enough for boosted trees over a dozen features
+# (hundreds of right and of wrong answers) whatever the gallery's size, so each object of a small
+# gallery gets more (at most 12 per kind)
 CALIBRATION_VIEWS = 600
 FEATURES = (
     'cost',
@@ -54,6 +55,9 @@ FEATURES = (
     'shape_gap',
     'searched',
 )
+# right and wrong answers each at least this many: the calibration is boosted trees, which then
+# learn where the evidence turns without learning the noise; fewer, a logistic regression
+LEAST_FOR_TREES = 50
 TWIN_RATIO = 1.4
 POSE_RIGHT = 0.1   # of the object's diameter, as ADD-S counts it
 
@@ -191,11 +195,10 @@ def calibrate(
     """
     Learn the calibration of the model's instance answers on views of its own meshes.
 
-    Returns (Calibration, twin pairs as gallery IDs); no Calibration when the views give no wrong
-    answer to learn from (a gallery of one object), and the confidence is then a monotone stand-in
-    (instance/answer.py).
+    Returns (the calibration, twin pairs as gallery IDs); no calibration when the views give no
+    wrong answer to learn from (a gallery of one object), and the confidence is then a monotone
+    stand-in (instance/answer.py).
     """
-    from pcrp_core.confidence import fit_calibration
     from pcrp_core.parallel import parallel_map
 
     if views_per_object is None:
@@ -208,5 +211,23 @@ def calibrate(
     twins = find_twins(answered)
     X, y = labelled_samples(answered, twins)
     ids = model.gallery.ids
-    calibration = fit_calibration(X, y, FEATURES) if 0 < sum(y) < len(y) else None
-    return calibration, [[ids[i], ids[j]] for i, j in twins]
+    return fit_view_calibration(X, y), [[ids[i], ids[j]] for i, j in twins]
+
+
+def fit_view_calibration(X: list[dict], y: list[bool]):
+    """
+    Learn the calibration of labelled answers; None when they are all right or all wrong.
+
+    Boosted trees given answers enough of each kind, a logistic regression otherwise. On the
+    robot report's validation views (two draws, 312 one-sided a draw) trees rejected 85-88 % of
+    the views of objects the gallery lacked where the regression rejected 75-81 %, right against
+    unknown ROC AUC 0.98 against 0.96-0.97, and answered partly hidden objects about as well.
+    """
+    from pcrp_core.confidence import fit_boosted_calibration, fit_calibration
+
+    n_right = int(sum(y))
+    if not 0 < n_right < len(y):
+        return None
+    if min(n_right, len(y) - n_right) >= LEAST_FOR_TREES:
+        return fit_boosted_calibration(X, y, FEATURES)
+    return fit_calibration(X, y, FEATURES)

@@ -25,13 +25,17 @@ from pcrp_core.category.fitting import Fitter
 from pcrp_core.category.hypothesis import Hypothesis
 from pcrp_core.category.prepared import prepare
 from pcrp_core.confidence import (
+    BoostedCalibration,
     Calibration,
     calibration_from_arrays,
+    fit_boosted_calibration,
     fit_calibration,
     fit_split_calibration,
     SplitCalibration,
 )
 from pcrp_core.config import PoseOptions
+from pcrp_core.instance.calibration import FEATURES, fit_view_calibration, LEAST_FOR_TREES
+import pytest
 
 
 def opposite_kinds(n: int = 2000):
@@ -71,6 +75,67 @@ def test_calibrations_come_back_from_their_arrays_as_they_were_stored():
     one = fit_calibration(samples, right, ('x',))
     assert isinstance(calibration_from_arrays(one.to_arrays('c_'), 'c_'), Calibration)
     assert calibration_from_arrays({}, 'c_') is None
+
+
+def a_band(n: int = 1500, seed: int = 6):
+    """Make evidence x meaning right inside a band (|x| < 1), wrong on either side of it."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(scale=1.5, size=n)
+    right = rng.random(n) < np.where(np.abs(x) < 1.0, 0.95, 0.05)
+    return [{'x': a} for a in x], right
+
+
+def test_boosted_trees_read_a_band_of_evidence_that_one_weight_cannot():
+    samples, right = a_band()
+    trees, one = fit_boosted_calibration(samples, right, ('x',)), fit_calibration(
+        samples, right, ('x',))
+    assert trees.probability({'x': 0.0}) > 0.85
+    assert trees.probability({'x': -2.5}) < 0.15 and trees.probability({'x': 2.5}) < 0.15
+    # a regression leans one way: it cannot call both sides of the band wrong
+    assert max(one.probability({'x': -2.5}), one.probability({'x': 2.5})) > 0.3
+
+
+def test_boosted_trees_from_plain_arrays_give_scikit_learns_probabilities():
+    from sklearn.ensemble import GradientBoostingClassifier
+
+    samples, right = a_band(400, seed=7)
+    samples = [{'x': s['x'], 'y': float(k)} for k, s in enumerate(samples)]
+    trees = fit_boosted_calibration(samples, right, ('x', 'y'))
+    X = np.array([[s['x'], s['y']] for s in samples])
+    reference = GradientBoostingClassifier(
+        n_estimators=200, max_depth=3, learning_rate=0.05, min_samples_leaf=10, subsample=0.8,
+        random_state=0).fit(X, right.astype(int))
+    again = calibration_from_arrays(trees.to_arrays('c_'), 'c_')
+    assert isinstance(again, BoostedCalibration)
+    ours = [again.probability(s) for s in samples]
+    np.testing.assert_allclose(ours, reference.predict_proba(X)[:, 1], atol=1e-12)
+
+
+@pytest.mark.parametrize('key, value, words', [
+    ('left', 10 ** 6, 'outside'),       # past the table
+    ('left', 0, 'before'),              # back to the root: a walk that never ends
+    ('feature', 7, 'evidence'),         # evidence the calibration does not name
+])
+def test_stored_trees_that_cannot_be_walked_are_refused(key, value, words):
+    samples, right = a_band(300)
+    arrays = fit_boosted_calibration(samples, right, ('x',)).to_arrays('c_')
+    arrays[f'c_trees_{key}'] = arrays[f'c_trees_{key}'].copy()
+    arrays[f'c_trees_{key}'][0] = value
+    with pytest.raises(ValueError, match=words):
+        calibration_from_arrays(arrays, 'c_')
+
+
+def test_view_calibration_is_trees_given_answers_enough_of_each_kind_else_a_regression():
+    rng = np.random.default_rng(3)
+
+    def answers(n_right, n_wrong):
+        right = np.r_[np.ones(n_right, bool), np.zeros(n_wrong, bool)]
+        X = [{n: float(rng.normal() + 2.0 * r * (n == 'cost')) for n in FEATURES} for r in right]
+        return X, list(right)
+
+    assert isinstance(fit_view_calibration(*answers(400, 400)), BoostedCalibration)
+    assert isinstance(fit_view_calibration(*answers(400, LEAST_FOR_TREES - 1)), Calibration)
+    assert fit_view_calibration(*answers(40, 0)) is None
 
 
 def egg(n: int = 2048) -> np.ndarray:

@@ -61,3 +61,17 @@ def test_stored_mirror_planes_are_the_ones_a_query_would_find_and_old_models_sti
     np.testing.assert_allclose(
         old.estimate(q).transform, PCRP.load(small_model).estimate(q).transform, atol=1e-9
     )
+
+
+def test_a_version_1_model_is_read_and_saved_again_as_version_2(tmp_path):
+    import json
+
+    from helpers import PROCEDURAL_MODEL
+
+    assert json.loads((PROCEDURAL_MODEL / 'model.json').read_text())['format_version'] == 1
+    model = PCRP.load(PROCEDURAL_MODEL)
+    model.save(tmp_path / 'again')
+    assert json.loads((tmp_path / 'again' / 'model.json').read_text())['format_version'] == 2
+    again = PCRP.load(tmp_path / 'again')
+    q = model.gallery_cloud(model.gallery_ids[0])
+    assert again.estimate(q).confidence == model.estimate(q).confidence
