@@ -16,7 +16,7 @@
 import subprocess
 import sys
 
-from helpers import hidden_cone, PROCEDURAL_MODEL, SURER
+from helpers import hidden_cone, PROCEDURAL_MODEL, surer
 import numpy as np
 from pcrp_core import PCRP
 from pcrp_ros.bag_commands import make_bag, process_bag, summary
@@ -142,7 +142,7 @@ def test_process_answers_each_cloud_with_the_depth_cloud_of_its_stamp(tmp_path):
     # the depth topic is read as scenes only, never answered as an object
     assert [(r['topic'], r['scene']) for r in rows] == [('object', 'used'), ('object', 'missing')]
     assert rows[0]['gallery_id'] == rows[1]['gallery_id'] == 'cone'
-    assert rows[0]['confidence'] > rows[1]['confidence'] + SURER
+    assert surer(rows[0]['confidence'], rows[1]['confidence'])
     assert 'scenes: used 1, missing 1' in summary(rows)
     out = _process_command(bag, tmp_path / 'cli', '--scene-topic', 'nothing/here')
     assert out.returncode == 0 and 'no depth clouds or images on the scene topic nothing/here' \
@@ -180,4 +180,4 @@ def test_process_reads_depth_images_with_the_camera_info_recorded_beside_them(tm
         ('object', 'rejected_no_camera_info'), ('object', 'used')]
     assert 'scenes: used 1, rejected_no_camera_info 1' in summary(rows)
     assert rows[0]['gallery_id'] == rows[1]['gallery_id'] == 'cone'
-    assert rows[1]['confidence'] > rows[0]['confidence'] + SURER
+    assert surer(rows[1]['confidence'], rows[0]['confidence'])

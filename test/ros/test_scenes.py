@@ -21,7 +21,7 @@ surer with the scene than without; every scene that cannot be used leaves the cl
 """
 
 from builtin_interfaces.msg import Time
-from helpers import hidden_cone, SURER
+from helpers import hidden_cone, surer
 import numpy as np
 from pcrp_core import DepthImage, PCRP
 from pcrp_ros.conversions import pointcloud2_to_xyz, xyz_to_pointcloud2
@@ -144,7 +144,7 @@ def test_a_cloud_is_answered_with_the_scene_of_its_stamp_and_frame(stream, model
     assert len(view.occluder) < len(given) < len(pointcloud2_to_xyz(depth))   # the wall cropped
     # what the occluder hid is no longer counted missing
     assert answer.gallery_id == without.gallery_id == 'cone'
-    assert answer.confidence > without.confidence + SURER, (
+    assert surer(answer.confidence, without.confidence), (
         answer.confidence, without.confidence)
     statuses = {s.name: s for s in stream.node.answerer.diagnostics().status}
     values = {kv.key: kv.value for kv in statuses[f'/pcrp_node: /{OBJECT}'].values}
@@ -181,7 +181,7 @@ def test_a_cameras_depth_cloud_is_read_and_cut_as_the_image_it_is(stream, model,
     # cut to the object's reach: at most the image, fewer pixels than the camera has
     assert 0 < given.z.size < depth.width * depth.height
     assert answer.gallery_id == 'cone'
-    assert answer.confidence > without.confidence + SURER, (
+    assert surer(answer.confidence, without.confidence), (
         answer.confidence, without.confidence)
 
 
@@ -392,4 +392,4 @@ def test_depth_images_are_answered_with_their_camera_info_and_bad_ones_counted(v
             scene, confidence = send(3, _depth_image(view, _header(3)))
             assert isinstance(scene, DepthImage) and stats.snapshot()['scene_used'] == 1
             np.testing.assert_allclose(scene.focal, view.camera.fx)
-            assert confidence > without + SURER, (confidence, without)
+            assert surer(confidence, without), (confidence, without)
