@@ -174,16 +174,22 @@ def calibration_from_arrays(arrays: dict, prefix: str):
     return SplitCalibration(str(arrays[prefix + 'split_key']), parts)
 
 
+def _answers(samples: list[dict], labels, names: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """Return (a row of the named features per sample, labels as 0 / 1), both kinds present."""
+    X = np.array([[s[n] for n in names] for s in samples], dtype=np.float64)
+    y = np.asarray(labels, dtype=int)
+    if len(set(y)) < 2:
+        raise ValueError('calibration needs both right and wrong answers')
+    return X, y
+
+
 def fit_calibration(
     samples: list[dict], labels, names: tuple, regularisation: float = 1.0
 ) -> Calibration:
     """Logistic regression of labels (1: the answer was right) on the named features."""
     from sklearn.linear_model import LogisticRegression
 
-    X = np.array([[s[n] for n in names] for s in samples], dtype=np.float64)
-    y = np.asarray(labels, dtype=int)
-    if len(set(y)) < 2:
-        raise ValueError('calibration needs both right and wrong answers')
+    X, y = _answers(samples, labels, names)
     mean, scale = X.mean(axis=0), X.std(axis=0)
     scale = np.where(scale > 1e-12, scale, 1.0)
     lr = LogisticRegression(C=regularisation, max_iter=1000).fit((X - mean) / scale, y)
@@ -205,10 +211,7 @@ def fit_boosted_calibration(
     """
     from sklearn.ensemble import GradientBoostingClassifier
 
-    X = np.array([[s[n] for n in names] for s in samples], dtype=np.float64)
-    y = np.asarray(labels, dtype=int)
-    if len(set(y)) < 2:
-        raise ValueError('calibration needs both right and wrong answers')
+    X, y = _answers(samples, labels, names)
     gb = GradientBoostingClassifier(
         n_estimators=trees, max_depth=depth, learning_rate=rate, min_samples_leaf=least_leaf,
         subsample=subsample, random_state=0,
