@@ -212,6 +212,7 @@ def register_query(sub) -> None:
         help="where the sensor was in the cloud's frame, when the cloud is one sensor's view "
         "(0,0,0 for a cloud in the camera's own frame, as a depth driver publishes it)",
     )
+    add_settings_option(p)
     p.set_defaults(func=_query)
 
 
@@ -238,9 +239,13 @@ def _query(args) -> int:
         if v is not None
     }
     try:
+        # the named options win over the same settings given by --set
+        model.set_params(**{**parse_settings(args.settings), **opts})
+    except ValueError as e:
+        return _fail(str(e))
+    try:
         up = parse_up(args.up)
         viewpoint = parse_up(args.viewpoint, '--viewpoint')
-        model.set_params(**opts)
         result = model.estimate(points, viewpoint=viewpoint, up=up)
     except (InvalidCloud, ValueError) as e:
         return _fail(f'{args.cloud}: {e}')
@@ -308,6 +313,7 @@ def register_eval(sub) -> None:
         metavar='FILE',
         help='also write the summary and per-view records here',
     )
+    add_settings_option(p)
     p.set_defaults(func=_eval)
 
 
@@ -324,7 +330,8 @@ def _eval(args) -> int:
         return _fail('--up needs --kind table: free views have no up')
     try:
         model = PCRP.load(None if args.model == 'default' else args.model)
-    except ModelError as e:
+        model.set_params(**parse_settings(args.settings))
+    except (ModelError, ValueError) as e:
         return _fail(str(e))
     if args.up:
         try:
@@ -405,6 +412,49 @@ def parse_up(text, option: str = '--up'):
     if len(up) != 3:
         raise ValueError(f'{option} {text!r}: expected three numbers, e.g. 0,0,1')
     return up
+
+
+def add_settings_option(p) -> None:
+    """Let a subcommand take any of the node's model parameters, as --set NAME=VALUE."""
+    p.add_argument(
+        '--set',
+        action='append',
+        default=[],
+        metavar='NAME=VALUE',
+        dest='settings',
+        help="any of the node's model parameters (docs/node.md), e.g. --set "
+        'local_shape_cost=inf; repeat for more',
+    )
+
+
+def parse_settings(pairs) -> dict:
+    """
+    Read --set NAME=VALUE pairs as settings, each value of its setting's type.
+
+    A ValueError names the pair and what is expected; bounds are the model's to check
+    (set_params).
+    """
+    from pcrp_core.config import user_settings
+
+    types = {d['name']: type(d['default']) for d in user_settings()}
+    out = {}
+    for pair in pairs:
+        name, sep, text = pair.partition('=')
+        if not sep or name not in types:
+            raise ValueError(
+                f'--set {pair!r}: expected NAME=VALUE with NAME one of {", ".join(sorted(types))}'
+            )
+        kind = types[name]
+        try:
+            if kind is bool:
+                if text.lower() not in ('true', 'false'):
+                    raise ValueError(text)
+                out[name] = text.lower() == 'true'
+            else:
+                out[name] = kind(text)
+        except ValueError:
+            raise ValueError(f'--set {pair!r}: {name} takes a {kind.__name__}') from None
+    return out
 
 
 def format_result(r) -> str:

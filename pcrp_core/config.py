@@ -137,7 +137,8 @@ class QueryOptions(Options):
     """
     What a loaded model does with each cloud.
 
-    With USER_POSE_SETTINGS, the settings a user (and the node, as parameters) tunes.
+    With USER_POSE_SETTINGS and USER_INSTANCE_SETTINGS, the settings a user (and the node, as
+    parameters) tunes.
     """
 
     n_candidates: int = setting(
@@ -399,16 +400,17 @@ class InstanceOptions(Options):
     )
     local_shape_cost: float = setting(
         0.5,
-        'An answer costing more than this (a poor fit: the object partly hidden, or not in the '
-        'gallery) is looked for again from matched local shape (FPFH in RANSAC); infinity '
-        'never.',
+        'Clouds matched view by view: an answer costing more than this (a poor fit: the object '
+        'partly hidden, or not in the gallery) is looked for again by matched local shape (FPFH '
+        'in RANSAC), which finds more partly hidden objects but takes several times as long; '
+        '.inf (infinity) never.',
         low=0.0,
     )
     local_shape_cost_hidden: float = setting(
         0.25,
-        'The same for an answer the scene shows partly hidden (a tenth or more of the surface it '
-        'would show lies behind something nearer): that surface is excused, so a poor fit costs '
-        'less, and the view hypotheses saw a cut silhouette.',
+        'The same for an answer the scene (scene_topics) shows partly hidden (a tenth or more of '
+        'the surface it would show lies behind something nearer): that surface is excused, so a '
+        'poor fit costs less, and the view hypotheses saw a cut silhouette; .inf never.',
         low=0.0,
     )
     local_shape_objects: int = setting(
@@ -450,6 +452,9 @@ class InstanceOptions(Options):
 
 # the pose settings a user tunes beside QueryOptions (the node's parameters)
 USER_POSE_SETTINGS = ('refine', 'up_tolerance_deg')
+# and the view-by-view ones: when to look again by local shape, time traded for partly hidden
+# objects (docs/node.md)
+USER_INSTANCE_SETTINGS = ('local_shape_cost', 'local_shape_cost_hidden')
 
 # The paper's registration: feature matches within the symmetry halves, Procrustes in RANSAC,
 # the best-fitting of those hypotheses; one retrieved object, no principal-axis, half-turn or
@@ -471,4 +476,5 @@ PAPER_QUERY = {'n_candidates': 1, 'n_candidates_view': 1, 'n_matched': 1, 'min_c
 def user_settings() -> list[dict[str, Any]]:
     """Return the settings a user tunes on a loaded model, as Options.describe() gives them."""
     pose = [d for d in PoseOptions.describe() if d['name'] in USER_POSE_SETTINGS]
-    return QueryOptions.describe() + pose
+    instance = [d for d in InstanceOptions.describe() if d['name'] in USER_INSTANCE_SETTINGS]
+    return QueryOptions.describe() + pose + instance

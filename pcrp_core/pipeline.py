@@ -35,7 +35,8 @@ from pcrp_core.confidence import (
     calibration_from_arrays,
     SplitCalibration,
 )
-from pcrp_core.config import InstanceOptions, PoseOptions, QueryOptions, USER_POSE_SETTINGS
+from pcrp_core.config import (InstanceOptions, PoseOptions, QueryOptions, USER_INSTANCE_SETTINGS,
+                              USER_POSE_SETTINGS)
 from pcrp_core.errors import ModelError
 from pcrp_core.features import PointHop
 from pcrp_core.gallery import Gallery
@@ -118,9 +119,10 @@ class PCRP:
 
     # -- settings -------------------------------------------------------------------------------
     def get_params(self) -> dict:
-        """Return the user's settings (QueryOptions and USER_POSE_SETTINGS) and their values."""
+        """Return the user's settings (config.user_settings()) and their values."""
         return {**{k: getattr(self.options, k) for k in self.options.__dataclass_fields__},
-                **{k: getattr(self.pose_options, k) for k in USER_POSE_SETTINGS}}
+                **{k: getattr(self.pose_options, k) for k in USER_POSE_SETTINGS},
+                **{k: getattr(self.instance_options, k) for k in USER_INSTANCE_SETTINGS}}
 
     def _options_with(self, changes: dict) -> tuple[QueryOptions, PoseOptions, InstanceOptions]:
         changes = dict(changes)

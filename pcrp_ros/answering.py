@@ -49,7 +49,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 import numpy as np
 from pcrp_core import InvalidCloud
-from pcrp_core.config import PoseOptions, QueryOptions
+from pcrp_core.config import InstanceOptions, PoseOptions, QueryOptions
 from pcrp_ros.conversions import aligned_points, CloudFormatError, detections_msg
 from pcrp_ros.conversions import pointcloud2_to_xyz, pose_stamped, xyz_to_pointcloud2
 from pcrp_ros.depth_images import camera_info_topic
@@ -717,5 +717,7 @@ def _checked_up(value, model):
 def _check_model_settings(values: dict) -> None:
     """Raise ValueError unless the model settings are valid together (no model needed)."""
     query = set(QueryOptions.__dataclass_fields__)
+    instance = set(InstanceOptions.__dataclass_fields__)
     QueryOptions(**{k: v for k, v in values.items() if k in query})
-    PoseOptions(**{k: v for k, v in values.items() if k not in query})
+    InstanceOptions(**{k: v for k, v in values.items() if k in instance})
+    PoseOptions(**{k: v for k, v in values.items() if k not in query | instance})

@@ -25,6 +25,7 @@ config/pcrp.yaml, which a test holds against these declarations.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 
 from pcrp_core.config import Options, setting, user_settings
 
@@ -137,10 +138,11 @@ def descriptor(spec: dict):
             )
         ]
     else:
+        # unbounded sides are infinite, so that a setting whose infinity means "never" takes it
         d.floating_point_range = [
             FloatingPointRange(
-                from_value=float(low if low is not None else -1e308),
-                to_value=float(high if high is not None else 1e308),
+                from_value=float(low if low is not None else -math.inf),
+                to_value=float(high if high is not None else math.inf),
                 step=0.0,
             )
         ]

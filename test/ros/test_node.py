@@ -165,6 +165,12 @@ def test_parameters_are_validated_at_runtime(model):
         assert not bad.successful and 'min_points' in bad.reason
         ok = node.set_parameters([Parameter('min_confidence', value=0.25)])[0]
         assert ok.successful and model.options.min_confidence == 0.25
+        # infinity is a value (never look again by local shape), below zero is not
+        ok = node.set_parameters([Parameter('local_shape_cost', value=float('inf'))])[0]
+        assert ok.successful and model.instance_options.local_shape_cost == float('inf')
+        bad = node.set_parameters([Parameter('local_shape_cost_hidden', value=-0.1)])[0]
+        assert not bad.successful and model.instance_options.local_shape_cost_hidden == 0.25
+        node.set_parameters([Parameter('local_shape_cost', value=0.5)])
         for name, value in (('workers', 2), ('input_topics', ['other'])):
             assert not node.set_parameters([Parameter(name, value=value)])[0].successful
         node.destroy_node()

@@ -267,6 +267,31 @@ def test_pcrp_eval_prints_right_or_twin_and_confidence_figures(built, capsys):
     assert '3 free occluded, occluder seen views of 3 meshes' in seen.stdout
 
 
+def test_pcrp_eval_answers_with_the_node_parameters_it_is_set(built, capsys):
+    """--set takes the node's model parameters: here whether a poor fit is looked for again."""
+    from pcrp_core.cli import main
+
+    meshes, _, model = built
+    ran = {}
+    for cost in ('0', 'inf'):
+        out = model.parent / f'eval_{cost}.json'
+        assert main(['eval', str(meshes), '--model', str(model), '--views-per-object', '1',
+                     '--occlusion', '--set', f'local_shape_cost={cost}', '--json', str(out)]) == 0
+        records = json.loads(out.read_text())['records']
+        ran[cost] = ['local_shape' in r['timings'] for r in records]
+    # every answer costs more than 0, and none more than infinity
+    assert ran == {'0': [True] * 3, 'inf': [False] * 3}
+    capsys.readouterr()
+    for pair, said in (('local_shape_cost=soon', 'local_shape_cost takes a float'),
+                       ('no_such_setting=1', 'expected NAME=VALUE with NAME one of'),
+                       ('local_shape_cost', 'expected NAME=VALUE'),
+                       ('local_shape_cost=-1', 'local_shape_cost'),
+                       ('refine=maybe', 'refine takes a bool')):
+        assert main(['eval', str(meshes), '--model', str(model), '--set', pair]) == 2, pair
+        err = capsys.readouterr().err
+        assert said in err and 'Traceback' not in err, (pair, err)
+
+
 def test_meshes_in_millimetres_are_refused_until_scaled_and_eval_scales_them_alike(
         built, tmp_path):
     meshes, _, _ = built

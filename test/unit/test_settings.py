@@ -44,6 +44,8 @@ def test_every_parameter_has_a_descriptor_with_its_bounds():
     assert len(by_name) == len(parameters())          # no name declared twice
     assert by_name['n_candidates'].integer_range[0].from_value == 1
     assert by_name['up_tolerance_deg'].floating_point_range[0].to_value == 180.0
+    # unbounded above: infinity (never look again) must pass ROS's range check
+    assert by_name['local_shape_cost'].floating_point_range[0].to_value == float('inf')
     assert by_name['workers'].read_only and not by_name['min_confidence'].read_only
     assert not by_name['model_path'].read_only   # set while running: the model is switched
 
