@@ -38,7 +38,8 @@ import time
 
 from tools.provenance import code_key, machine, REPO
 from tools.robot_protocol import (BASELINES, HELD_OUT, HOLDOUT_SEED, LOOKALIKE, METHODS,
-                                  QUICK_OBJECTS, RECIPE, SCENARIOS, SEEDS, VIEWS_PER_OBJECT)
+                                  NO_LOCAL_SHAPE, QUICK_OBJECTS, RECIPE, SCENARIOS, SEEDS,
+                                  VIEWS_PER_OBJECT)
 
 CACHE = Path(os.environ.get('PCRP_CACHE', Path.home() / '.cache' / 'pcrp')) / 'robot'
 THREAD_VARS = ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS')
@@ -301,6 +302,12 @@ def run(data: Path, split: str, views: int, quick: bool, cache: Path, rebuild: b
         rows = {'pcrp': evaluate(model, scenes, meshes, use_up=up, progress=_progress,
                                  truths=truths, twins=twins, use_scene=seen)}
         part['pcrp'] = time.perf_counter() - t0
+        if occluded:
+            t0 = time.perf_counter()
+            rows['pcrp_no_local_shape'] = evaluate(
+                model.with_options(**NO_LOCAL_SHAPE), scenes, meshes, use_up=up,
+                progress=_progress, truths=truths, twins=twins, use_scene=seen)
+            part['pcrp_no_local_shape'] = time.perf_counter() - t0
         t0 = time.perf_counter()
         unknown[name] = evaluate(reduced, scenes, meshes, use_up=up, progress=_progress,
                                  truths=truths, twins=reduced_twins, use_scene=seen)
@@ -318,7 +325,7 @@ def run(data: Path, split: str, views: int, quick: bool, cache: Path, rebuild: b
         _say(f'robot-report: {name} took {sum(part.values()) / 60:.1f} min')
     seconds['total'] = time.perf_counter() - t_start
     load.append(os.getloadavg()[0])
-    methods = {k: v for k, v in METHODS.items() if k == 'pcrp' or baseline_views}
+    methods = {k: v for k, v in METHODS.items() if k not in BASELINES or baseline_views}
     return {
         'split': split, 'seed': seed, 'quick': quick, 'views_per_object': views,
         'baseline_views': baseline_views, 'data': str(data), 'objects': chosen,

@@ -321,6 +321,7 @@ def test_the_robot_report_quick_run_writes_its_files_and_holds_an_object_out(
         built, monkeypatch, capsys):
     from tools import robot_writer
     from tools.__main__ import main
+    from tools.robot_protocol import BASELINES
     from tools.robot_report import THREAD_VARS
 
     for var in THREAD_VARS:     # the report sets them to 1 for its timings; restored after
@@ -344,8 +345,15 @@ def test_the_robot_report_quick_run_writes_its_files_and_holds_an_object_out(
     assert set(res['results']) == set(res['unknown']) == scenarios
     assert all(len(rows) == 3 for per in res['results'].values() for rows in per.values())
     assert set(res['results']['free']) == {'pcrp', 'ransac', 'fgr', 'ransac_told', 'fgr_told'}
-    # the occluded views again with the occluder seen: the same views, pcrp alone
-    assert set(res['results']['free_occluded_seen']) == {'pcrp'}
+    # the occluded views again with the occluder seen: the same views, pcrp alone; every
+    # occluded scenario also without looking again by local shape, which then never runs
+    assert set(res['results']['free_occluded_seen']) == {'pcrp', 'pcrp_no_local_shape'}
+    assert set(res['results']['free_occluded']) == {'pcrp', 'pcrp_no_local_shape', *BASELINES}
+    assert not any('local_shape' in r['timings'] for per in res['results'].values()
+                   for r in per.get('pcrp_no_local_shape', []))
+    again = text.split('### Looking again')[1].split('## Where pcrp fails')[0]
+    assert again.count('| local_shape_cost .inf | 0 of 3 |') == 4
+    assert again.count('| defaults |') == 4
     assert ([r['object_id'] for r in res['results']['free_occluded_seen']['pcrp']]
             == [r['object_id'] for r in res['results']['free_occluded']['pcrp']])
     assert '| **all** | 12 |' in text    # 3 views in each of 4 scenarios: each view once
