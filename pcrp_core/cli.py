@@ -414,6 +414,10 @@ def parse_up(text, option: str = '--up'):
     return up
 
 
+# what a --set value must look like, by its setting's type
+TYPE_WORDS = {bool: 'true or false', int: 'an integer', float: 'a number (inf for infinity)'}
+
+
 def add_settings_option(p) -> None:
     """Let a subcommand take any of the node's model parameters, as --set NAME=VALUE."""
     p.add_argument(
@@ -453,7 +457,8 @@ def parse_settings(pairs) -> dict:
             else:
                 out[name] = kind(text)
         except ValueError:
-            raise ValueError(f'--set {pair!r}: {name} takes a {kind.__name__}') from None
+            expected = TYPE_WORDS.get(kind, kind.__name__)
+            raise ValueError(f'--set {pair!r}: {name} takes {expected}') from None
     return out
 
 

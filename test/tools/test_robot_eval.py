@@ -282,11 +282,12 @@ def test_pcrp_eval_answers_with_the_node_parameters_it_is_set(built, capsys):
     # every answer costs more than 0, and none more than infinity
     assert ran == {'0': [True] * 3, 'inf': [False] * 3}
     capsys.readouterr()
-    for pair, said in (('local_shape_cost=soon', 'local_shape_cost takes a float'),
+    for pair, said in (('local_shape_cost=soon', 'local_shape_cost takes a number'),
+                       ('n_candidates=1.5', 'n_candidates takes an integer'),
                        ('no_such_setting=1', 'expected NAME=VALUE with NAME one of'),
                        ('local_shape_cost', 'expected NAME=VALUE'),
                        ('local_shape_cost=-1', 'local_shape_cost'),
-                       ('refine=maybe', 'refine takes a bool')):
+                       ('refine=maybe', 'refine takes true or false')):
         assert main(['eval', str(meshes), '--model', str(model), '--set', pair]) == 2, pair
         err = capsys.readouterr().err
         assert said in err and 'Traceback' not in err, (pair, err)
