@@ -414,10 +414,6 @@ def parse_up(text, option: str = '--up'):
     return up
 
 
-# what a --set value must look like, by its setting's type
-TYPE_WORDS = {bool: 'true or false', int: 'an integer', float: 'a number (inf for infinity)'}
-
-
 def add_settings_option(p) -> None:
     """Let a subcommand take any of the node's model parameters, as --set NAME=VALUE."""
     p.add_argument(
@@ -433,33 +429,34 @@ def add_settings_option(p) -> None:
 
 def parse_settings(pairs) -> dict:
     """
-    Read --set NAME=VALUE pairs as settings, each value of its setting's type.
+    Read --set NAME=VALUE pairs as settings: true or false, a number (inf too), else the text.
 
-    A ValueError names the pair and what is expected; bounds are the model's to check
-    (set_params).
+    A ValueError names a pair that is not NAME=VALUE of a known setting; the value itself is the
+    setting's to check when it is set (set_params: type, bounds, choices, in config's words).
     """
     from pcrp_core.config import user_settings
 
-    types = {d['name']: type(d['default']) for d in user_settings()}
+    names = sorted(d['name'] for d in user_settings())
     out = {}
     for pair in pairs:
         name, sep, text = pair.partition('=')
-        if not sep or name not in types:
+        if not sep or name not in names:
             raise ValueError(
-                f'--set {pair!r}: expected NAME=VALUE with NAME one of {", ".join(sorted(types))}'
+                f'--set {pair!r}: expected NAME=VALUE with NAME one of {", ".join(names)}'
             )
-        kind = types[name]
-        try:
-            if kind is bool:
-                if text.lower() not in ('true', 'false'):
-                    raise ValueError(text)
-                out[name] = text.lower() == 'true'
-            else:
-                out[name] = kind(text)
-        except ValueError:
-            expected = TYPE_WORDS.get(kind, kind.__name__)
-            raise ValueError(f'--set {pair!r}: {name} takes {expected}') from None
+        out[name] = _literal(text)
     return out
+
+
+def _literal(text: str):
+    if text.lower() in ('true', 'false'):
+        return text.lower() == 'true'
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
 
 
 def format_result(r) -> str:

@@ -282,12 +282,13 @@ def test_pcrp_eval_answers_with_the_node_parameters_it_is_set(built, capsys):
     # every answer costs more than 0, and none more than infinity
     assert ran == {'0': [True] * 3, 'inf': [False] * 3}
     capsys.readouterr()
-    for pair, said in (('local_shape_cost=soon', 'local_shape_cost takes a number'),
-                       ('n_candidates=1.5', 'n_candidates takes an integer'),
-                       ('no_such_setting=1', 'expected NAME=VALUE with NAME one of'),
-                       ('local_shape_cost', 'expected NAME=VALUE'),
-                       ('local_shape_cost=-1', 'local_shape_cost'),
-                       ('refine=maybe', 'refine takes true or false')):
+    bad_pairs = (('local_shape_cost=soon', "local_shape_cost: expected a number, got 'soon'"),
+                 ('n_candidates=1.5', 'n_candidates: expected an integer, got 1.5'),
+                 ('no_such_setting=1', 'expected NAME=VALUE with NAME one of'),
+                 ('local_shape_cost', 'expected NAME=VALUE'),
+                 ('local_shape_cost=-1', 'local_shape_cost: -1.0 is outside [0.0, inf]'),
+                 ('refine=maybe', "refine: expected true or false, got 'maybe'"))
+    for pair, said in bad_pairs:
         assert main(['eval', str(meshes), '--model', str(model), '--set', pair]) == 2, pair
         err = capsys.readouterr().err
         assert said in err and 'Traceback' not in err, (pair, err)
