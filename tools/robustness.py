@@ -209,9 +209,7 @@ def run_faults(model_dir: Path, work: Path) -> list[tuple]:
     np.save(cloud, np.random.default_rng(0).normal(size=(500, 3)))
     rows = []
     for fault in FAULTS:
-        results = [
-            try_fault(fault, program, model_dir, work, cloud) for program in ('node', 'cli')
-        ]
+        results = try_fault(fault, model_dir, work, cloud)
         ok = [handled(fault, r, str(work / fault.name)) for r in results]
         rows.append((fault, results, ok))
         print(

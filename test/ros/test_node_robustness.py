@@ -78,10 +78,11 @@ def test_a_broken_model_stops_the_node_and_the_cli_with_one_clear_line(fault, tm
     np.save(cloud, np.random.default_rng(0).normal(size=(200, 3)))
     with pytest.raises(ModelError, match=fault.words):
         PCRP.load(damaged_copy(fault, PROCEDURAL_MODEL, tmp_path))
-    for program in ('node', 'cli'):
-        result = try_fault(fault, program, PROCEDURAL_MODEL, tmp_path, cloud)
+    results = try_fault(fault, PROCEDURAL_MODEL, tmp_path, cloud)
+    assert [r.program for r in results] == ['node', 'cli']
+    for result in results:
         assert handled(fault, result, str(tmp_path / fault.name)), (
-            program,
+            result.program,
             result.returncode,
             result.stderr,
         )
