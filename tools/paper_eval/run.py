@@ -61,8 +61,8 @@ class Settings:
         self.data, self.out, self.seed = Path(data), Path(out), seed
         self.quick = quick
         self.per_category = per_category if per_category is not None else (2 if quick else None)
-        self.build_limit = 16 if quick else None  # train objects per category in the models
-        self.large_limit = 4 if quick else None
+        self.build_limit = 8 if quick else None  # train objects per category in the models
+        self.large_limit = 2 if quick else None
         self.rejection_per_category = 2 if quick else min(self.per_category or 100, 30)
         self.jobs, self.progress, self.log = jobs, progress, log
         self.cache = Path(cache) if cache else Path.home() / '.cache' / 'pcrp' / 'eval'
