@@ -40,7 +40,7 @@ class LocalShape:
     """A cloud thinned on a voxel grid, with the FPFH of each of its points."""
 
     cloud: o3d.geometry.PointCloud
-    features: np.ndarray    # (n, 33), a row per point
+    features: np.ndarray    # (n, 33) float32, a row per point
     norms: np.ndarray       # (n,) the rows' squared lengths
 
     @property
@@ -52,7 +52,11 @@ class LocalShape:
 
 def _describe(cloud: o3d.geometry.PointCloud, radius: float) -> LocalShape:
     search = o3d.geometry.KDTreeSearchParamHybrid(radius=radius, max_nn=100)
-    features = np.ascontiguousarray(np.asarray(REG.compute_fpfh_feature(cloud, search).data).T)
+    # float32: the bins are percentages, and single precision halves what the matches' matrix
+    # product and its minima read, their cost
+    features = np.ascontiguousarray(
+        np.asarray(REG.compute_fpfh_feature(cloud, search).data).T, dtype=np.float32
+    )
     return LocalShape(cloud, features, np.einsum('ij,ij->i', features, features))
 
 
@@ -91,8 +95,10 @@ def matches(cloud: LocalShape, obj: LocalShape) -> np.ndarray:
     # squared distances, less the cloud row's own length, which no row's nearest depends on
     d = obj.norms[None, :] - 2.0 * (cloud.features @ obj.features.T)
     nearest = d.argmin(axis=1)
-    back = (d + cloud.norms[:, None]).argmin(axis=0)
-    rows = np.flatnonzero(back[nearest] == np.arange(len(nearest)))
+    # nearest back only from the object points some cloud point chose: no other can be mutual
+    chosen, column = np.unique(nearest, return_inverse=True)
+    back = (d[:, chosen] + cloud.norms[:, None]).argmin(axis=0)
+    rows = np.flatnonzero(back[column] == np.arange(len(nearest)))
     if len(rows) < LEAST_MUTUAL:
         rows = np.arange(len(nearest))
     return np.stack([rows, nearest[rows]], axis=1).astype(np.int32)
