@@ -380,6 +380,13 @@ def test_the_robot_report_quick_run_writes_its_files_and_holds_an_object_out(
     robot_writer.write(res, out)
     sweep = (out / 'ROBOT_validation.md').read_text()
     assert '## Threshold sweep' in sweep and '| 0.8 |' in sweep and 'unknown rejected' in sweep
+    # without the baselines (--no-baselines) there are no views of theirs to answer pcrp on again
+    alone = {**res, 'baseline_views': 0,
+             'methods': {m: t for m, t in res['methods'].items() if m not in BASELINES},
+             'results': {n: {m: rows for m, rows in per.items() if m not in BASELINES}
+                         for n, per in res['results'].items()}}
+    robot_writer.write(alone, out)
+    assert "pcrp on Open3D's views only" not in (out / 'ROBOT_validation.md').read_text()
 
 
 def test_a_model_without_some_objects_is_built_from_the_others_and_cached(built, tmp_path):
