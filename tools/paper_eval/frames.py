@@ -44,15 +44,16 @@ ELONGATED = 1.5  # long side / short side: which side is longer is then the obje
 _GALLERIES: dict = {}
 
 
-def _gallery(data, category: str, exclude=()):
+def _gallery(data, category: str, exclude=(), limit: int | None = None):
     """
     (train clouds subsampled, their trees).
 
-    But those named in exclude, once per process and category.
+    But those named in exclude, once per process and category; limit: an evenly spread subset of
+    that many (a quick run's), as load_split takes it.
     """
-    key = (category, tuple(exclude))
+    key = (category, tuple(exclude), limit)
     if key not in _GALLERIES:
-        names, pts = load_split(data, category, 'train')
+        names, pts = load_split(data, category, 'train', limit)
         skip = set(exclude)
         clouds = [subsample(p, i) for i, (n, p) in enumerate(zip(names, pts)) if n not in skip]
         _GALLERIES[key] = (np.stack(clouds), [cKDTree(c) for c in clouds])
@@ -65,9 +66,11 @@ def audit_one(state: dict, item) -> dict:
 
     item: (name, category, points) of one test object (or of a train object named in
     state["exclude"][category], which the train objects it is compared with then leave out).
+    state["limit"]: compare with only that many train objects a category (None: all of them).
     """
     name, category, points = item
-    clouds, trees = _gallery(state['data'], category, state.get('exclude', {}).get(category, ()))
+    clouds, trees = _gallery(state['data'], category, state.get('exclude', {}).get(category, ()),
+                             state.get('limit'))
     cost = chamfer_by_rotation(subsample(points, 0), clouds, trees)
     best = cost.argmin(1)
     nearest = np.argsort(cost.min(1))

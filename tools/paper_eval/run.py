@@ -63,6 +63,9 @@ class Settings:
         self.per_category = per_category if per_category is not None else (2 if quick else None)
         self.build_limit = 8 if quick else None  # train objects per category in the models
         self.large_limit = 2 if quick else None
+        # train objects per category a frame is audited against: all of them (hundreds, 24 turns
+        # each) would be most of a quick run's frames and held-out sections
+        self.audit_limit = 32 if quick else None
         self.rejection_per_category = 2 if quick else min(self.per_category or 100, 30)
         self.jobs, self.progress, self.log = jobs, progress, log
         self.cache = Path(cache) if cache else Path.home() / '.cache' / 'pcrp' / 'eval'
@@ -83,7 +86,8 @@ def run_frames(s: Settings) -> dict:
         names, pts = load_split(s.data, category, 'test', s.per_category)
         items += [(n, category, p) for n, p in zip(names, pts)]
         sides[category] = frames.long_sides(load_split(s.data, category, 'train')[1], pts)
-    rows = s.map_items(frames.audit_one, items, {'data': str(s.data)}, 'frames of the data')
+    rows = s.map_items(frames.audit_one, items, {'data': str(s.data), 'limit': s.audit_limit},
+                       'frames of the data')
     summary = frames.summarise(rows)
     for category in summary:
         summary[category]['long_side'] = sides[category]
@@ -216,7 +220,7 @@ def run_holdout(s: Settings, model_path) -> dict:
     frame_rows = s.map_items(
         frames.audit_one,
         items,
-        {'data': str(s.data), 'exclude': exclude},
+        {'data': str(s.data), 'exclude': exclude, 'limit': s.audit_limit},
         'frames of held-out objects',
     )
     qs = [make_query(n, c, p, query_rng(s.seed, f'holdout/{n}', 0)) for n, c, p in items]
