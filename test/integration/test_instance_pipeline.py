@@ -49,7 +49,7 @@ def mesh_model(tmp_path_factory):
     meshes = {name: _mesh(make()) for name, make in SHAPES.items()}
     objects = [GalleryObject(name, name, m.sample(2048), mesh=m) for name, m in meshes.items()]
     path = tmp_path_factory.mktemp('meshes') / 'model'
-    PCRP.build(objects, n_jobs=1).save(path)
+    PCRP.build(objects).save(path)
     return PCRP.load(path), meshes
 
 
@@ -161,7 +161,7 @@ def test_meshes_whose_origin_lies_metres_away_are_posed_as_well():
         m = _mesh(SHAPES[name]())
         meshes[name] = Mesh(m.vertices + offset, m.triangles)
     objects = [GalleryObject(n, n, m.sample(2048), mesh=m) for n, m in meshes.items()]
-    model = PCRP.build(objects, n_jobs=1)
+    model = PCRP.build(objects)
     for k, (name, mesh) in enumerate(meshes.items()):
         for v in range(2):
             scene = sample_scene(mesh, name, k, v, 'free', seed=11)
