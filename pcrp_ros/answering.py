@@ -35,6 +35,11 @@ stamp and frame (pcrp_ros/scenes.py), cropped to what the estimate can use. The 
 up when the cloud is queued (the scene message is kept with it, unread) and, if none had come
 yet, again when a worker takes the cloud; it is read only then. A cloud whose scene is missing
 or unusable is answered without one: counted, and logged as rejections are.
+
+A program that runs the node in its own process may set `on_answer`, a callable told
+(topic, header, PoseResult) of every estimate, rejected ones too, from the worker thread that made
+it (the demo shows each cloud's confidence so). What it raises is logged, throttled, and the
+stream goes on.
 """
 
 from __future__ import annotations
@@ -130,6 +135,7 @@ class CloudAnswerer:
         self._reload_lock = threading.Lock()
         self._pending = None
         self._reloader = None
+        self.on_answer = None     # (topic, header, PoseResult) of every estimate; see above
         node.add_on_set_parameters_callback(self._on_set_parameters)
         node.add_post_set_parameters_callback(self._on_parameters_set)
 
@@ -506,6 +512,7 @@ class CloudAnswerer:
             return
         stats = self.stats[topic]
         stats.estimated(result.timings, None if result.rejected else result.confidence)
+        self._tell(topic, header, result)
         if result.rejected:
             self.reject(topic, 'low_confidence', result.reason)
             return
@@ -525,6 +532,16 @@ class CloudAnswerer:
         now = self.node.get_clock().now().nanoseconds * 1e-9
         stats.timing(time.monotonic() - received, now - stamp)
         stats.count('answered')
+
+    def _tell(self, topic: str, header, result) -> None:
+        """Hand an estimate to on_answer, if set; nothing it raises stops the stream."""
+        if self.on_answer is None:
+            return
+        try:
+            self.on_answer(topic, header, result)
+        except Exception as e:   # the caller's code: its failure must not cost the answer
+            if self._due((topic, 'on_answer')):
+                self._log().error(f'{topic}: on_answer raised {type(e).__name__}: {e}')
 
     def _estimate(self, topic: str, item: Waiting, engine: Engine, k: int):
         """

@@ -38,14 +38,35 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
 
     bag = bag or str(DEMO_BAG)
     _, truths, _ = read_bag(bag)
-    rclpy.init()
-    node = PcrpNode(
-        model=PCRP.load(model_path),
-        parameter_overrides=[Parameter('sensor_at_origin', value=True)],
-    )
-    client = rclpy.create_node('pcrp_demo')
     sent, rows, lock = {}, [], threading.Lock()
     poses, ids = [], []
+    estimates = {}   # stamp -> the node's PoseResult of that cloud, told as it is made
+
+    def show(key, gallery_id, R, t, status):
+        """Print and keep the row of the cloud stamped key, answered gallery_id at (R, t)."""
+        cloud, t_sent = sent[key]
+        gt = truths.get(
+            (cloud['topic'], cloud['msg'].header.stamp.sec, cloud['msg'].header.stamp.nanosec), {}
+        )
+        row = {'topic': cloud['topic'], 'stamp': f'{key[0]}.{key[1]:09d}', 'status': status,
+               'latency_ms': 1e3 * (time.monotonic() - t_sent), 'gallery_id': gallery_id,
+               'category': node.model.category_of(gallery_id)}
+        if key in estimates:
+            row['confidence'] = estimates[key].confidence
+        if gt:
+            row.update(true_id=gt['gallery_id'], true_category=gt['category'],
+                       **answer_quality(node.model, gallery_id, R, t, gt))
+        rows.append(row)
+        print(format_row(row), flush=True)
+
+    def on_answer(topic, header, result):
+        # every estimate, from the node's worker: a rejected one publishes nothing to show
+        key = (header.stamp.sec, header.stamp.nanosec)
+        with lock:
+            estimates[key] = result
+            if result.rejected and key in sent:
+                show(key, result.gallery_id, result.rotation, result.translation,
+                     'rejected: low_confidence')
 
     def pair():
         # pose and ID of one cloud are published together, one of each, in order: pair by arrival
@@ -54,22 +75,9 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
             key = (msg.header.stamp.sec, msg.header.stamp.nanosec)
             if key not in sent:
                 continue
-            cloud, t_sent = sent[key]
-            gt = truths.get(
-                (cloud['topic'], cloud['msg'].header.stamp.sec, cloud['msg'].header.stamp.nanosec),
-                {},
-            )
-            q = msg.pose.orientation
+            q, p = msg.pose.orientation, msg.pose.position
             R = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
-            row = {'topic': cloud['topic'], 'stamp': f'{key[0]}.{key[1]:09d}', 'status': 'ok',
-                   'latency_ms': 1e3 * (time.monotonic() - t_sent), 'gallery_id': gid,
-                   'category': node.model.category_of(gid)}
-            p = msg.pose.position
-            if gt:
-                row.update(true_id=gt['gallery_id'], true_category=gt['category'],
-                           **answer_quality(node.model, gid, R, [p.x, p.y, p.z], gt))
-            rows.append(row)
-            print(format_row(row), flush=True)
+            show(key, gid, R, [p.x, p.y, p.z], 'ok')
 
     def on_pose(msg: PoseStamped):
         with lock:
@@ -81,6 +89,13 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
             ids.append(msg.data)
             pair()
 
+    rclpy.init()
+    node = PcrpNode(
+        model=PCRP.load(model_path),
+        parameter_overrides=[Parameter('sensor_at_origin', value=True)],
+        on_answer=on_answer,
+    )
+    client = rclpy.create_node('pcrp_demo')
     client.create_subscription(String, '/segmented_object/gallery_id', on_id, 10)
     client.create_subscription(PoseStamped, '/segmented_object/pose', on_pose, 10)
     ex = node_executor()

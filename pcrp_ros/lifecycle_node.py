@@ -36,10 +36,12 @@ from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackRet
 class PcrpLifecycleNode(LifecycleNode):
     """Managed pcrp node; the answering is CloudAnswerer's, as in the plain node."""
 
-    def __init__(self, model=None, node_name: str = 'pcrp_node', **kwargs):
+    def __init__(self, model=None, node_name: str = 'pcrp_node', on_answer=None, **kwargs):
+        """Declare the parameters; model and on_answer as the plain node's (node.py)."""
         super().__init__(node_name, **kwargs)
         self._given_model = model
         self.answerer = CloudAnswerer(self)
+        self.answerer.on_answer = on_answer
 
     @property
     def model(self):

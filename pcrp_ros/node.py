@@ -44,9 +44,15 @@ START_ERRORS = (ModelError, ValueError, ParameterException, NameValidationExcept
 class PcrpNode(Node):
     """The plain node: loads its model and answers from the moment it is made."""
 
-    def __init__(self, model=None, node_name: str = 'pcrp_node', **kwargs):
+    def __init__(self, model=None, node_name: str = 'pcrp_node', on_answer=None, **kwargs):
+        """
+        Load the model (a PCRP, or None: model_path's) and start answering.
+
+        on_answer: told (topic, header, PoseResult) of every estimate (pcrp_ros/answering.py).
+        """
         super().__init__(node_name, **kwargs)
         self.answerer = CloudAnswerer(self)
+        self.answerer.on_answer = on_answer
         self.answerer.configure(model)
         try:
             self.answerer.activate()

@@ -13,6 +13,7 @@
 # limitations under the License.
 
 """The node over real DDS: outputs, headers, agreement with the core, bad input, parameters."""
+import dataclasses
 import threading
 
 from builtin_interfaces.msg import Time
@@ -378,3 +379,34 @@ def test_topics_take_turns_when_the_node_falls_behind(model, monkeypatch):
         gate.release()
         assert order == ['a', 'b', 'a', 'b', 'a']
         node.destroy_node()
+
+
+def test_on_answer_is_told_every_estimate_and_what_it_raises_stops_nothing(model, monkeypatch):
+    # a program running the node in its own process (the demo) sees each cloud's answer,
+    # rejected ones too, which publish nothing; a hook that raises costs no answer
+    told = []
+
+    def on_answer(topic, header, result):
+        told.append((topic, header.stamp.sec, result.gallery_id, result.rejected))
+        if header.stamp.sec == 2:
+            raise RuntimeError('a bug in the caller')
+    with ros_context() as ctx:
+        node = PcrpNode(model=model, context=ctx, on_answer=on_answer, parameter_overrides=[
+            Parameter('sensor_at_origin', value=False)])
+        real, calls = model.estimate, []
+
+        def third_rejected(*args, **kwargs):
+            calls.append(1)
+            r = real(*args, **kwargs)
+            return dataclasses.replace(r, rejected=True, reason='low') if len(calls) == 3 else r
+        monkeypatch.setattr(model, 'estimate', third_rejected)
+        gid = model.gallery_ids[0]
+        cloud = model.gallery_cloud(gid).astype(np.float64) + [0.0, 0.0, 2.0]
+        stats = node.stats['segmented_object']
+        for sec in (1, 2, 3):
+            node.answerer._on_cloud('segmented_object', xyz_to_pointcloud2(cloud, _header(sec)))
+            assert wait_for(lambda: stats.counts['answered'] + stats.counts['rejected'] == sec, 60)
+        node.destroy_node()
+    assert told == [('segmented_object', 1, gid, False), ('segmented_object', 2, gid, False),
+                    ('segmented_object', 3, gid, True)]
+    assert stats.counts['answered'] == 2 and stats.rejections['low_confidence'] == 1
