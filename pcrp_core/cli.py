@@ -319,7 +319,8 @@ def register_eval(sub) -> None:
 
 def _eval(args) -> int:
     from pcrp_core import ModelError, PCRP
-    from pcrp_core.evaluation.run import evaluate, format_summary, jsonable, summarise
+    from pcrp_core.evaluation.run import (evaluate, format_summary, format_unknown, jsonable,
+                                          summarise, unknown_statistics)
     from pcrp_core.evaluation.scenes import sample_scenes
     from pcrp_core.sources import load_source
     from pcrp_core.sources.units import scaled
@@ -361,26 +362,36 @@ def _eval(args) -> int:
     if unknown:
         print(
             f"pcrp eval: {len(unknown)} of the meshes are not in the model's gallery, "
-            'so can never be named: '
+            'so can never be named (their views measure how often it refuses what it lacks): '
             f"{', '.join(unknown[:5])}",
             file=sys.stderr,
         )
     try:
+        # the gallery's objects are drawn the views they get without the others beside them
+        order = [g for g in meshes if g not in unknown] + unknown
         scenes = sample_scenes(
-            meshes, args.views_per_object, args.kind, args.occlusion, args.seed, progress=_progress
+            meshes, args.views_per_object, args.kind, args.occlusion, args.seed,
+            indices={g: i for i, g in enumerate(order)}, progress=_progress
         )
     except RuntimeError as e:
         return _fail(str(e))
     rows = evaluate(model, scenes, meshes, use_up=args.up, progress=_progress,
                     use_scene=args.scene)
-    summary = summarise(rows)
-    print(
-        f"{len(rows)} {args.kind}{' occluded' if args.occlusion else ''}"
-        f"{', occluder seen' if args.occlusion and args.scene else ''} views of "
-        f'{len(meshes)} meshes, seed '
-        f"{args.seed}{', up given' if args.up else ''}; model {args.model}"
-    )
-    print(format_summary(summary))
+    # the gallery's objects are scored as they are; those it lacks only by what it refuses
+    known = [r for r in rows if r['object_id'] in model.gallery.index]
+    outside = [r for r in rows if r['object_id'] not in model.gallery.index]
+    summary = summarise(known)
+    summary['unknown'] = unknown_statistics(known, outside)
+    views = (f"{args.kind}{' occluded' if args.occlusion else ''}"
+             f"{', occluder seen' if args.occlusion and args.scene else ''} views")
+    drawn = f"seed {args.seed}{', up given' if args.up else ''}; model {args.model}"
+    if known:
+        print(f'{len(known)} {views} of {len(meshes) - len(unknown)} meshes, {drawn}')
+        print(format_summary(summary))
+    else:
+        print(f'{len(outside)} {views} of {len(unknown)} meshes the gallery lacks, {drawn}')
+    if outside:
+        print(format_unknown(summary['unknown'], len(unknown)))
     if args.json:
         with open(args.json, 'w') as f:
             json.dump(

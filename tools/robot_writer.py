@@ -27,7 +27,8 @@ from pathlib import Path
 import numpy as np
 from pcrp_core.confidence import expected_calibration_error, reliability
 from pcrp_core.evaluation import metrics
-from pcrp_core.evaluation.run import cell, COLUMNS, jsonable, statistics, summarise
+from pcrp_core.evaluation.run import (cell, COLUMNS, jsonable, statistics, summarise,
+                                      unknown_statistics)
 from pcrp_core.evaluation.scenes import DISTANCE, ELEVATION_DEG, MIN_PIXELS, OCCLUDED_SHARE
 from pcrp_core.instance.calibration import CALIBRATION_SEED
 from pcrp_core.sources.camera import PinholeCamera, RangeNoise
@@ -152,14 +153,11 @@ def _unknown_auc(known: list[dict], unknown: list[dict]) -> float:
     The held-out model's right answers on known objects against its answers on unknown ones (which
     are all wrong, whatever they name).
     """
-    right = [r['confidence'] for r in _answered(known) if r['pose_right']]
-    return metrics.roc_auc(right, [r['confidence'] for r in _answered(unknown)])
+    return unknown_statistics(known, unknown).get('auc', math.nan)
 
 
 def _unknown_rejected(rows: list[dict], threshold: float) -> float:
-    if not rows:
-        return float('nan')
-    return float(np.mean([r['gallery_id'] is None or r['confidence'] < threshold for r in rows]))
+    return unknown_statistics([], rows, threshold).get('rejected', math.nan)
 
 
 # -- figures ------------------------------------------------------------------------------------

@@ -235,6 +235,33 @@ def statistics(rows: list[dict], min_confidence: float | None = None) -> dict:
             'seconds_p95': float(np.quantile(seconds, 0.95))}
 
 
+def unknown_statistics(known: list[dict], unknown: list[dict],
+                       min_confidence: float | None = None) -> dict:
+    """
+    Figures of views of objects the gallery lacks (every answer to them is wrong).
+
+    rejected: the share of those views rejected; auc: the chance that a right answer on an object
+    the gallery holds (known: their views) is more confident than an answer on one it lacks.
+    """
+    if not unknown:
+        return {'views': 0}
+    right = [r['confidence'] for r in known if r['gallery_id'] is not None and r['pose_right']]
+    return {'views': len(unknown),
+            'rejected': float(np.mean([rejected_at(r, min_confidence) for r in unknown])),
+            'auc': metrics.roc_auc(right, [r['confidence'] for r in unknown
+                                           if r['gallery_id'] is not None])}
+
+
+def format_unknown(stats: dict, meshes: int) -> str:
+    """Return unknown_statistics as one line of text."""
+    text = (f"objects the gallery lacks: {stats['views']} views of {meshes} meshes, "
+            f"{stats['rejected']:.0%} rejected")
+    if np.isfinite(stats['auc']):   # there were right answers on the gallery's own objects
+        text += (f"; conf AUC {stats['auc']:.2f} (right answers on the gallery's objects "
+                 'against answers on these)')
+    return text
+
+
 def stage_means(rows: list[dict]) -> dict:
     """Mean seconds per stage of the answers' timings, in the order the stages ran."""
     keys = list(dict.fromkeys(k for r in rows for k in r.get('timings') or {}))

@@ -267,6 +267,47 @@ def test_pcrp_eval_prints_right_or_twin_and_confidence_figures(built, capsys):
     assert '3 free occluded, occluder seen views of 3 meshes' in seen.stdout
 
 
+def test_pcrp_eval_scores_meshes_the_gallery_lacks_by_what_it_refuses(built):
+    meshes, _, model = built
+    mixed = model.parent / 'mixed'
+    mixed.mkdir()
+    for mesh in meshes.iterdir():
+        (mixed / mesh.name).symlink_to(mesh)
+    ball = o3d.geometry.TriangleMesh.create_sphere(0.05, resolution=30)
+    o3d.io.write_triangle_mesh(str(mixed / 'ball.ply'), ball)
+    out = model.parent / 'mixed.json'
+    done = _run('eval', str(mixed), '--model', str(model), '--views-per-object', '2',
+                '--json', str(out))
+    assert done.returncode == 0, done.stderr
+    assert 'ball' in done.stderr and 'refuses what it lacks' in done.stderr
+    # the gallery's own three are scored as without the ball; the ball only by what is refused
+    assert '6 free views of 3 meshes' in done.stdout
+    assert 'objects the gallery lacks: 2 views of 1 meshes' in done.stdout
+    result = json.loads(out.read_text())
+    assert result['summary']['overall']['views'] == 6
+    unknown = result['summary']['unknown']
+    balls = [r for r in result['records'] if r['object_id'] == 'ball']
+    assert unknown['views'] == len(balls) == 2
+    assert unknown['rejected'] == np.mean([r['rejected'] for r in balls])
+    # and drawn the same views as without it, so adding outsiders leaves their figures be
+    alone = model.parent / 'alone.json'
+    assert _run('eval', str(meshes), '--model', str(model), '--views-per-object', '2',
+                '--json', str(alone)).returncode == 0
+
+    def seen(records):
+        return [(r['object_id'], r['n_points'], r['gallery_id']) for r in records
+                if r['object_id'] != 'ball']
+    assert seen(json.loads(alone.read_text())['records']) == seen(result['records'])
+    # a folder of outsiders alone: what is refused, and no table of the gallery's objects
+    outsiders = model.parent / 'outsiders'
+    outsiders.mkdir()
+    (outsiders / 'ball.ply').symlink_to(mixed / 'ball.ply')
+    only = _run('eval', str(outsiders), '--model', str(model), '--views-per-object', '1')
+    assert only.returncode == 0, only.stderr
+    assert '1 free views of 1 meshes the gallery lacks' in only.stdout
+    assert 'overall' not in only.stdout and 'objects the gallery lacks: 1 views' in only.stdout
+
+
 def test_pcrp_eval_answers_with_the_node_parameters_it_is_set(built, capsys):
     """--set takes the node's model parameters: here whether a poor fit is looked for again."""
     from pcrp_core.cli import main
