@@ -525,7 +525,7 @@ class CloudAnswerer:
             cloud = aligned_points(result, engine.model.gallery_cloud(result.gallery_id))
             pubs['aligned_model'].publish(xyz_to_pointcloud2(cloud, header))
         if 'detections' in pubs:
-            det = detections_msg(result, header)
+            det = detections_msg(result, header, engine.model.gallery_cloud(result.gallery_id))
             if det is not None:
                 pubs['detections'].publish(det)
         stamp = header.stamp.sec + 1e-9 * header.stamp.nanosec

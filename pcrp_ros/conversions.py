@@ -211,8 +211,14 @@ def aligned_points(result, gallery_points) -> np.ndarray:
     )
 
 
-def detections_msg(result, header):
-    """Make a vision_msgs/Detection3DArray of one detection (None without vision_msgs)."""
+def detections_msg(result, header, gallery_points=None):
+    """
+    Make a vision_msgs/Detection3DArray of one detection (None without vision_msgs).
+
+    gallery_points: the answered object's points in its own frame. Its bounding box then goes in
+    bbox: the object's box, turned with it, centred where the box's centre lands (an object's
+    origin is seldom its box's centre: a mug's is often its base); else only the pose, size 0.
+    """
     try:
         from vision_msgs.msg import Detection3D, Detection3DArray, ObjectHypothesisWithPose
     except ImportError:
@@ -224,5 +230,13 @@ def detections_msg(result, header):
     det = Detection3D(header=header)
     det.results = [hyp]
     det.bbox.center = pose_to_msg(result)
+    if gallery_points is not None and len(gallery_points):
+        g = np.asarray(gallery_points, dtype=np.float64)
+        lo, hi = g.min(axis=0), g.max(axis=0)
+        centre = aligned_points(result, ((lo + hi) / 2)[None])[0]
+        p = det.bbox.center.position
+        p.x, p.y, p.z = (float(v) for v in centre)
+        s = det.bbox.size
+        s.x, s.y, s.z = (float(v) for v in result.scale * (hi - lo))
     det.id = result.gallery_id
     return Detection3DArray(header=header, detections=[det])

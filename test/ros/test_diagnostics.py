@@ -140,7 +140,8 @@ def test_detections_carry_the_confidence_as_their_score(monkeypatch):
 
     class Detection:
         def __init__(self, header=None):
-            self.header, self.results, self.bbox, self.id = header, [], Box(center=None), ''
+            self.header, self.results, self.id = header, [], ''
+            self.bbox = Box(center=None, size=Box(x=0.0, y=0.0, z=0.0))
     fake = types.ModuleType('vision_msgs.msg')
     fake.Detection3D, fake.ObjectHypothesisWithPose = Detection, Hypothesis
     fake.Detection3DArray = Box
@@ -150,6 +151,17 @@ def test_detections_carry_the_confidence_as_their_score(monkeypatch):
     out = detections_msg(result, Header(frame_id='cam'))
     hyp = out.detections[0].results[0].hypothesis
     assert hyp.score == pytest.approx(0.37) and hyp.class_id == 'chair_0001'
+    # with the object's points, the box is the object's: a mug 8 x 8 x 10 cm whose origin is at
+    # its base, answered lying on its side 1 m ahead, has its box's centre 5 cm off the origin
+    mug = np.array([[x, y, z] for x in (-0.04, 0.04) for y in (-0.04, 0.04) for z in (0.0, 0.1)])
+    R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])   # z turned onto -y
+    lying = PoseResult('mug', 'mug', R, np.array([0.0, 0.0, 1.0]), confidence=0.9)
+    box = detections_msg(lying, Header(frame_id='cam'), mug).detections[0].bbox
+    c = box.center.position
+    np.testing.assert_allclose([c.x, c.y, c.z], [0.0, -0.05, 1.0], atol=1e-12)
+    np.testing.assert_allclose([box.size.x, box.size.y, box.size.z], [0.08, 0.08, 0.1])
+    o = box.center.orientation
+    np.testing.assert_allclose(np.abs([o.x, o.y, o.z, o.w]), np.abs(lying.quaternion), atol=1e-12)
 
 
 def test_a_rejected_answer_publishes_nothing_but_its_timings_count(model, monkeypatch):
