@@ -353,8 +353,9 @@ def summary(rows) -> str:
         lines.append(
             f'accuracy on answered clouds ({len(withgt)}): right object {gallery_id:.0%}, '
             f'category {category:.0%}, pose right (ADD-S under 10 % of the size) '
-            f'{np.mean(surface < 0.1):.0%}, '
-            f'rotation error median {np.median(err):.1f} deg (blind to symmetry)')
+            f'{np.mean(surface < 0.1):.0%}, ADD-S median {np.median(surface):.1%} of the size; '
+            f'rotation error median {np.median(err):.1f} deg (blind to symmetry: a can turned '
+            'about its axis is wrong by it, right by ADD-S)')
     return '\n'.join(lines)
 
 
