@@ -383,6 +383,13 @@ class InstanceOptions(Options):
     )
     score_points: int = setting(48, 'Query points the hypotheses are ranked on.', low=8)
     poses_refined: int = setting(2, 'Best hypotheses per object refined by ICP.', low=1)
+    poses_refined_again: int = setting(
+        2,
+        'An answer that fits poorly (local_shape_cost) first has this many more hypotheses '
+        'of each of the best objects refined: the right pose is often ranked just past the '
+        'first few; 0: none.',
+        low=0,
+    )
     objects_refined: int = setting(
         7, 'Objects, best-ranked first, whose hypotheses are refined and judged.', low=1
     )

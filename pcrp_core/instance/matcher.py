@@ -25,7 +25,10 @@ Which known object a camera's cloud shows, and its pose: the steps of the instan
    best other object is much of how sure it can be (confidence.py).
 5. Half turns: the answer turned half about each of its object's axes, refined and judged too,
    since a nearly symmetric object is often answered turned (best_half_turn).
-6. Local shape: an answer that still fits poorly (an object partly hidden: its visible centroid
+6. More poses: an answer that fits poorly (looks_again) has the next few poses of the best
+   objects refined and judged: the coarse cost ranks a right pose past the first few when it
+   cannot tell an object from itself turned, or part of it is hidden.
+7. Local shape: an answer that still fits poorly (an object partly hidden: its visible centroid
    and silhouette misled step 2), or, given the scene, is partly hidden and fits less than well
    (looks_again), has the objects nearest the cloud's shape placed again from FPFH matches in
    RANSAC (local_shape.py), refined and judged alike (from_local_shape).
@@ -48,11 +51,14 @@ from scipy.spatial import cKDTree
 # an answer whose expected surface the scene shows hidden this much is partly hidden: its view
 # hypotheses came from a cut silhouette and a shifted centroid
 PARTLY_HIDDEN = 0.1
+# objects, best-ranked first, whose further poses a poor fit refines (step 6): the answer's and
+# its nearest rivals', as on the validation views poses_refined_again was chosen on
+AGAIN_OBJECTS = 3
 
 
 def looks_again(fit: Fit, opts) -> bool:
     """
-    Whether an answer fits poorly enough to be looked for again by local shape (step 6).
+    Whether an answer fits poorly enough to be looked for again (steps 6 and 7).
 
     Its cost over local_shape_cost, or, partly hidden behind what the scene shows, over
     local_shape_cost_hidden: its hidden surface costs it nothing, so the same misfit costs less.
@@ -228,6 +234,17 @@ class InstanceMatcher:
                 best = turned
         return best
 
+    def _refine_poses(self, best_of: dict, i: int, Rs, ts, query: Surface, source, tau: float,
+                      opts, clock) -> None:
+        """Refine and judge object i at each pose (Rs, ts); keep its best in best_of[i]."""
+        for R, t in zip(Rs, ts):
+            R, t = self.refine(i, R, t, source, self.stages(i, tau))
+            clock.lap('refinement')
+            candidate = self.verify(i, R, t, query, tau, opts)
+            if i not in best_of or candidate.fit.cost < best_of[i].fit.cost:
+                best_of[i] = candidate
+            clock.lap('verification')
+
     def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,
               exclude=(), scene=None) -> Match:
         """
@@ -273,7 +290,7 @@ class InstanceMatcher:
             cost = hypotheses.coarse_cost(
                 R, t, v, sample, self.surface(i)[0].tree, tpl.samples[i], query.tree
             )
-            best = np.argsort(cost)[: opts.poses_refined]
+            best = np.argsort(cost)[: opts.poses_refined + opts.poses_refined_again]
             ranked.append((float(cost[best[0]]), int(i), R[best], t[best]))
         ranked.sort(key=lambda r: r[0])
         clock.lap('hypotheses')
@@ -286,20 +303,23 @@ class InstanceMatcher:
         within = [
             r for r in ranked[: opts.objects_refined] if r[0] <= opts.coarse_ratio * ranked[0][0]
         ]
+        first = opts.poses_refined
         for _, i, Rs, ts in within:
-            for R, t in zip(Rs, ts):
-                R, t = self.refine(i, R, t, source, self.stages(i, tau))
-                clock.lap('refinement')
-                candidate = self.verify(i, R, t, query, tau, opts)
-                if i not in best_of or candidate.fit.cost < best_of[i].fit.cost:
-                    best_of[i] = candidate
-                clock.lap('verification')
+            self._refine_poses(best_of, i, Rs[:first], ts[:first], query, source, tau, opts, clock)
         order = sorted(best_of.values(), key=lambda c: c.fit.cost)
+        turn_up = up_object if up is not None else None   # half turns about it alone
         if opts.half_turns:
-            order[0] = self.best_half_turn(
-                order[0], query, source, tau, opts, up_object if up is not None else None
-            )
+            order[0] = self.best_half_turn(order[0], query, source, tau, opts, turn_up)
             clock.lap('verification')
+        if opts.poses_refined_again and looks_again(order[0].fit, opts):
+            answer = best_of[order[0].index] = order[0]   # with its half turn
+            for _, i, Rs, ts in within[:AGAIN_OBJECTS]:
+                self._refine_poses(best_of, i, Rs[first:], ts[first:], query, source, tau, opts,
+                                   clock)
+            order = sorted(best_of.values(), key=lambda c: c.fit.cost)
+            if opts.half_turns and order[0] is not answer:
+                order[0] = self.best_half_turn(order[0], query, source, tau, opts, turn_up)
+                clock.lap('verification')
         before = order[0].fit.cost
         if looks_again(order[0].fit, opts):
             # by shape again, further down than the shortlist: a hidden part shrinks the view,
