@@ -548,12 +548,13 @@ def _looking_again(res: dict, summaries: dict) -> str | None:
                          _pct(s['right_rejected']), _num(s['seconds_median'] * 1000, 0),
                          _num(s['seconds_p95'] * 1000, 0)])
     return ('An answer that fits poorly (or, given the scene, is partly hidden) is looked for '
-            "again by matched local shape, FPFH in RANSAC on the objects of the cloud's shape "
-            "(the node's `local_shape_cost` and `local_shape_cost_hidden`). A user who needs "
-            'speed over partly hidden objects more than the objects it finds sets both to '
-            '`.inf`: the same views answered so, beside the defaults. Looked again: views local '
-            'shape ran on; right accepted and wrong accepted: shares of the views; right '
-            'rejected: share of the right answers; times in ms, one thread.\n\n'
+            'again: a few more poses of the best objects, then, if it still fits poorly, matched '
+            "local shape, FPFH in RANSAC on the objects of the cloud's shape (the node's "
+            '`local_shape_cost` and `local_shape_cost_hidden`). A user who needs speed over '
+            'partly hidden objects more than the objects it finds sets both to `.inf`: the same '
+            'views answered so, beside the defaults. Looked again: views local shape ran on; '
+            'right accepted and wrong accepted: shares of the views; right rejected: share of '
+            'the right answers; times in ms, one thread.\n\n'
             + _table(['scenario', 'settings', 'looked again', 'pose right', 'right accepted',
                       'wrong accepted', 'right rejected', 'median ms', 'p95 ms'], rows))
 
