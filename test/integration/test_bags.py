@@ -54,6 +54,7 @@ def test_make_bag_then_process_it(tmp_path, storage):
     )
 
 
+@pytest.mark.slow
 def test_upright_objects_before_a_level_camera_are_answered_upright_when_told_up(tmp_path):
     from pcrp_ros.bag_commands import UP_IN_LEVEL_CAMERA
     bag = tmp_path / 'level'

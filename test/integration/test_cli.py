@@ -18,6 +18,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 
 def pcrp(*args):
@@ -26,6 +27,7 @@ def pcrp(*args):
     )
 
 
+@pytest.mark.slow
 def test_build_a_gallery_then_query_a_cloud_file(tmp_path):
     model = tmp_path / 'model'
     built = pcrp('build', 'procedural:4', '--out', str(model))

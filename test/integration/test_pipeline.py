@@ -81,6 +81,7 @@ def _mirror_snap(model, on: bool):
     return m
 
 
+@pytest.mark.slow
 def test_mirror_planes_tighten_the_poses_of_mirror_symmetric_objects(model):
     """
     Held-back airplanes and chairs, whole, in random poses.

@@ -224,6 +224,7 @@ def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
         np.testing.assert_allclose(np.abs(q @ q[0]), 1.0, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_a_short_soak_accounts_for_every_cloud(capsys):
     from tools.soak import run
     # reliable input, so the counts hold the node to account and not the machine's load: best

@@ -204,6 +204,7 @@ def test_the_bar_names_the_labels_bound_and_a_tie_at_the_quarter_turn():
 
 
 @pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
+@pytest.mark.slow
 def test_pcrp_eval_quick_writes_the_report_with_every_experiment(tmp_path):
     out = tmp_path / 'results'
     proc = subprocess.run(

@@ -335,6 +335,7 @@ def test_pcrp_eval_answers_with_the_node_parameters_it_is_set(built, capsys):
         assert said in err and 'Traceback' not in err, (pair, err)
 
 
+@pytest.mark.slow
 def test_meshes_in_millimetres_are_refused_until_scaled_and_eval_scales_them_alike(
         built, tmp_path):
     meshes, _, _ = built
@@ -360,6 +361,7 @@ def test_meshes_in_millimetres_are_refused_until_scaled_and_eval_scales_them_ali
     assert overall['right_or_twin'] == overall['pose_right'] == 1.0
 
 
+@pytest.mark.slow
 def test_the_robot_report_quick_run_writes_its_files_and_holds_an_object_out(
         built, monkeypatch, capsys):
     from tools import robot_writer
