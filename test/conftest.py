@@ -28,7 +28,7 @@ GROUPS = ('unit', 'integration', 'ros', 'tools')
 
 # A test that hangs (a crashed child a pool waits on for ever, say) ends the run with every
 # thread's traceback rather than holding CI to its time limit. The slowest test, the quick paper
-# evaluation, takes 3-5 minutes.
+# evaluation, takes about 2 minutes.
 HANG_SECONDS = 1200
 HANG_REPORT = pytest.StashKey[object]()
 
