@@ -442,3 +442,11 @@ def test_a_model_without_some_objects_is_built_from_the_others_and_cached(built,
     links = sorted(p.name for p in (cache / f'{path.name}_meshes').iterdir())
     assert links == ['flat_box.ply', 'tall_can.ply']
     assert build_model(meshes, cache, without=['flat_box_copy']) == path
+
+
+def test_a_report_calls_the_machine_shared_only_for_load_beyond_its_own():
+    """A validation run on an idle machine was headed 'shared with other work' by its own load."""
+    from tools.robot_writer import _shared
+    assert not _shared([0.1, 1.6], 2)    # idle at the start, the report's own load at the end
+    assert _shared([2.2, 1.5], 2)        # something else was running when it started
+    assert _shared([0.3, 2.6], 2)        # something else took a core during the run
