@@ -150,7 +150,7 @@ class QueryOptions(Options):
     n_matched: int = setting(
         2,
         'Of those, the first ones whose point features seed RANSAC hypotheses (whole '
-        'clouds: only with the pose setting whole_features).',
+        'clouds: at most the pose setting whole_matched).',
         low=1,
         high=50,
     )
@@ -256,11 +256,14 @@ class PoseOptions(Options):
         low=0,
     )
     seeders_view: int = setting(0, 'The same for clouds from a sensor.', low=0)
-    whole_features: bool = setting(
-        True,
-        'Whole clouds: also seed RANSAC hypotheses from the point features of the '
-        'n_matched first candidates (principal axes and half turns find the same '
-        "poses, without the gallery's features).",
+    whole_matched: int = setting(
+        1,
+        'Whole clouds: of the n_matched first candidates, how many seed RANSAC hypotheses from '
+        'their point features (principal axes and half turns find most of the same poses; the '
+        "features tell a known object from its half turn). 0: none, the gallery's features are "
+        'never computed.',
+        low=0,
+        high=50,
     )
     pool_size: int = setting(6, 'Whole clouds: distinct rotations that go to the vote.', low=1)
     pool_size_view: int = setting(6, 'The same for clouds from a sensor.', low=1)
@@ -289,7 +292,7 @@ class PoseOptions(Options):
         1e-6, 'ICP stops once the trimmed mean squared error gains less.', low=0.0
     )
     final_ratio: float = setting(
-        float('inf'),
+        1.5,
         'Whole clouds: candidates whose fit in the vote is within this factor of the '
         'best are fully refined (the others do not end near the best).',
         low=1.0,
@@ -330,6 +333,12 @@ class PoseOptions(Options):
     )
     icp_points: int = setting(256, 'Query points used by ICP and scoring.', low=16)
     coarse_points: int = setting(256, 'Query points hypotheses are told apart on.', low=16)
+    seed_points: int = setting(
+        128,
+        'Whole clouds: query points each candidate first refines and ranks its hypotheses on '
+        '(the vote judges the best of them on coarse_points).',
+        low=16,
+    )
     inlier_distance: float = setting(
         0.05,
         'Distance under which a query point counts as on the model, normalised ' 'units.',
@@ -474,7 +483,8 @@ PAPER_POSE = PoseOptions(
     consensus=False,
     seeders=1,
     seeders_view=1,
-    whole_features=True,
+    whole_matched=1,
+    seed_points=256,
     reverse_weight=0.0,
 )
 PAPER_QUERY = {'n_candidates': 1, 'n_candidates_view': 1, 'n_matched': 1, 'min_confidence': 0.0}

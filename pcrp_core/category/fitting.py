@@ -49,31 +49,44 @@ class Fitter:
         src = query.sampled if query.sampled is not None else query.points
         if len(src) > opts.icp_points:
             src = src[rng.choice(len(src), opts.icp_points, replace=False)]
+        # hypotheses are told apart on fewer points than the final refinement uses, and a whole
+        # cloud's are first ranked on fewer still: the vote judges the best of them again
         self.src = src
-        # hypotheses are told apart on fewer points than the final refinement uses
         self.coarse_src = src if len(src) <= opts.coarse_points else src[: opts.coarse_points]
+        n_seed = opts.seed_points if viewpoint is None else opts.coarse_points
+        self.seed_src = self.coarse_src[:n_seed]
         # the gallery's points are taken back into the query's frame to be matched
         # (scoring.distances_back)
         self.tree = NearestPoints(src)
         self.coarse_tree = (
             self.tree if self.coarse_src is src else NearestPoints(self.coarse_src)
         )
+        self.seed_tree = (
+            self.coarse_tree
+            if len(self.seed_src) == len(self.coarse_src)
+            else NearestPoints(self.seed_src)
+        )
 
     def refine(
-        self, R, t, gallery: Prepared, iterations: int, source: str, coarse: bool = True
+        self, R, t, gallery: Prepared, iterations: int, source: str, on: str = 'coarse'
     ) -> Hypothesis:
-        return self.refine_many([R], [t], gallery, iterations, [source], coarse)[0]
+        return self.refine_many([R], [t], gallery, iterations, [source], on)[0]
 
     def refine_many(
-        self, Rs, ts, gallery: Prepared, iterations: int, sources, coarse: bool = True, prev=None
+        self, Rs, ts, gallery: Prepared, iterations: int, sources, on: str = 'coarse', prev=None
     ) -> list[Hypothesis]:
         """
         refine() of several poses on one gallery object, sharing its tree queries.
 
-        prev resumes ICP runs that stopped at those poses (see icp_batch).
+        on: the query points used, 'seed', 'coarse' or 'full' (see __init__). prev resumes ICP runs
+        that stopped at those poses (see icp_batch).
         """
         opts = self.opts
-        src, tree = (self.coarse_src, self.coarse_tree) if coarse else (self.src, self.tree)
+        src, tree = {
+            'seed': (self.seed_src, self.seed_tree),
+            'coarse': (self.coarse_src, self.coarse_tree),
+            'full': (self.src, self.tree),
+        }[on]
         Rs, ts = np.asarray(Rs, dtype=np.float64), np.asarray(ts, dtype=np.float64)
         prev, moving = (np.full(len(Rs), np.inf) if prev is None else prev), np.ones(len(Rs), bool)
         if opts.refine and iterations > 0:

@@ -65,10 +65,10 @@ def resume(
             gallery,
             opts.icp_iterations - vote_iterations,
             [hyp.source],
-            coarse=False,
+            on='full',
             prev=[vote.icp_prev],
         )[0]
-    return fitter.refine(hyp.R, hyp.t, gallery, opts.icp_iterations, hyp.source, coarse=False)
+    return fitter.refine(hyp.R, hyp.t, gallery, opts.icp_iterations, hyp.source, on='full')
 
 
 def both_ways(fitter: Fitter, hyp: Hypothesis, gallery: Prepared) -> tuple[np.ndarray, np.ndarray]:
@@ -153,4 +153,4 @@ def finish(fitter: Fitter, hyp: Hypothesis, gallery: Prepared) -> Hypothesis:
         if is_mirror and plane.rms < fit:
             R, t = snap(R, t, plane, target, q.points.mean(axis=0))
             source += '+mirror'
-    return fitter.refine(R, t, gallery, 0, source, coarse=False)
+    return fitter.refine(R, t, gallery, 0, source, on='full')

@@ -125,7 +125,7 @@ class Registrar:
         if not opts.consensus or len(verifiers) == 1:
             best = min(pool, key=lambda h: h.chamfer)
             final = fitter.refine(
-                best.R, best.t, verifiers[0], opts.icp_iterations, best.source, coarse=False
+                best.R, best.t, verifiers[0], opts.icp_iterations, best.source, on='full'
             )
             final = refinement.finish(fitter, final, verifiers[0])
             self.clock.lap('refinement')

@@ -68,16 +68,18 @@ def seeds(
             upright,
         )
     Rs, ts, sources = zip(*found)
-    hyps = fitter.refine_many(Rs, ts, gallery, iterations, sources)
+    hyps = fitter.refine_many(Rs, ts, gallery, iterations, sources, 'seed')
     if opts.flips:
         best = min(up.keep(hyps), key=lambda h: h.chamfer)
         Rs, ts = zip(*hypotheses.flips(best.R, best.t, gallery.points.mean(0)))
-        hyps += fitter.refine_many(Rs, ts, gallery, iterations, [best.source + '+flip'] * len(Rs))
+        hyps += fitter.refine_many(
+            Rs, ts, gallery, iterations, [best.source + '+flip'] * len(Rs), 'seed'
+        )
     if up.known and not up.upright([h.R for h in hyps]).any():
         # nothing upright from features or principal axes (a one-sided view's axes need not be
         # the object's): stand the query up and try it turned every way about the vertical
         Rs = hypotheses.upright_turns(*up.up, opts.upright_turns)
         ts = gallery.points.mean(0) - Rs @ query.points.mean(0)
-        hyps += fitter.refine_many(Rs, ts, gallery, iterations, ['upright'] * len(Rs))
+        hyps += fitter.refine_many(Rs, ts, gallery, iterations, ['upright'] * len(Rs), 'seed')
     clock.lap('hypotheses')
     return up.keep(hyps)

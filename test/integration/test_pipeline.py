@@ -262,3 +262,29 @@ def test_clouds_from_a_sensor_keep_their_own_share_of_icp_matches(model, monkeyp
     part, camera = partial_view(cloud, np.random.default_rng(5), 0.0, with_camera=True)
     variant.estimate(part, viewpoint=camera)
     assert (whole, set(trims)) == ({0.7}, {0.9})
+
+
+def test_whole_clouds_rank_hypotheses_on_fewer_points_and_fewer_candidates_features(
+    model, monkeypatch
+):
+    from pcrp_core.category import fitting
+    from pcrp_core.sources.views import partial_view
+    points, featured = [], []
+    icp, get = fitting.icp_batch, model.prepared.get
+    monkeypatch.setattr(
+        fitting, 'icp_batch', lambda *args, **kw: points.append(len(args[0])) or icp(*args, **kw)
+    )
+    monkeypatch.setattr(
+        model.prepared, 'get', lambda i, feats, size: featured.append(feats) or get(i, feats, size)
+    )
+    variant = model.with_options(seed_points=40, coarse_points=200, n_matched=3, whole_matched=1)
+    cloud = model.gallery_cloud(model.gallery_ids[0]).astype(np.float64)
+    variant.estimate(cloud)
+    whole = (set(points), sum(featured))
+    points[:], featured[:] = [], []
+    part, camera = partial_view(cloud, np.random.default_rng(5), 0.0, with_camera=True)
+    variant.estimate(part, viewpoint=camera)
+    # a whole cloud: hypotheses on 40 points, the vote on 200, the final refinement on all 256; one
+    # candidate's features. A view: its hypotheses on the vote's points, three candidates' features
+    assert whole == ({40, 200, 256}, 1)
+    assert (set(points), sum(featured)) == ({200, 256}, 3)
