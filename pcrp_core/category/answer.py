@@ -88,11 +88,7 @@ def answer(
         up_pair,
     )
     top = [int(i) for i in idx[:n_candidates]]
-    # a gallery object's point features cost as much as the query's: whole clouds, whose principal
-    # axes and half turns find most poses, compute fewer of them
-    n_matched = opts.n_matched
-    if viewpoint is None:
-        n_matched = min(n_matched, pose_opts.whole_matched)
+    n_matched = registrar.effort.matched(opts.n_matched)
     matched = [model.prepared.get(i, True, opts.cache_size) for i in top[:n_matched]]
     verifiers = matched + [model.prepared.get(i, False, opts.cache_size) for i in top[n_matched:]]
     j, h = registrar.best_pose(matched, verifiers, [model.gallery.categories[i] for i in top])

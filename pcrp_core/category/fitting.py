@@ -42,8 +42,19 @@ class Fitter:
     """
 
     def __init__(
-        self, query: Prepared, opts: PoseOptions, rng: np.random.Generator, viewpoint=None
+        self,
+        query: Prepared,
+        opts: PoseOptions,
+        rng: np.random.Generator,
+        viewpoint=None,
+        seed_points: int | None = None,
     ):
+        """
+        Draw the query's subsamples.
+
+        seed_points: how many of them each candidate first ranks its hypotheses on (coarse_points
+        when None; registrar.Effort chooses it for whole clouds and views).
+        """
         self.query, self.opts, self.viewpoint = query, opts, viewpoint
         self.trim = opts.icp_trim if viewpoint is None else opts.icp_trim_view
         src = query.sampled if query.sampled is not None else query.points
@@ -53,19 +64,22 @@ class Fitter:
         # cloud's are first ranked on fewer still: the vote judges the best of them again
         self.src = src
         self.coarse_src = src if len(src) <= opts.coarse_points else src[: opts.coarse_points]
-        n_seed = opts.seed_points if viewpoint is None else opts.coarse_points
-        self.seed_src = self.coarse_src[:n_seed]
+        n_seed = opts.coarse_points if seed_points is None else seed_points
+        coarse = self.coarse_src
+        self.seed_src = coarse if len(coarse) <= n_seed else coarse[:n_seed]
         # the gallery's points are taken back into the query's frame to be matched
         # (scoring.distances_back)
         self.tree = NearestPoints(src)
-        self.coarse_tree = (
-            self.tree if self.coarse_src is src else NearestPoints(self.coarse_src)
-        )
+        self.coarse_tree = self.tree if coarse is src else NearestPoints(coarse)
         self.seed_tree = (
-            self.coarse_tree
-            if len(self.seed_src) == len(self.coarse_src)
-            else NearestPoints(self.seed_src)
+            self.coarse_tree if self.seed_src is coarse else NearestPoints(self.seed_src)
         )
+        # the query points and their tree each refine_many(on=...) works with
+        self._on = {
+            'seed': (self.seed_src, self.seed_tree),
+            'coarse': (coarse, self.coarse_tree),
+            'full': (src, self.tree),
+        }
 
     def refine(
         self, R, t, gallery: Prepared, iterations: int, source: str, on: str = 'coarse'
@@ -82,11 +96,7 @@ class Fitter:
         that stopped at those poses (see icp_batch).
         """
         opts = self.opts
-        src, tree = {
-            'seed': (self.seed_src, self.seed_tree),
-            'coarse': (self.coarse_src, self.coarse_tree),
-            'full': (self.src, self.tree),
-        }[on]
+        src, tree = self._on[on]
         Rs, ts = np.asarray(Rs, dtype=np.float64), np.asarray(ts, dtype=np.float64)
         prev, moving = (np.full(len(Rs), np.inf) if prev is None else prev), np.ones(len(Rs), bool)
         if opts.refine and iterations > 0:

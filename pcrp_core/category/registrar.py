@@ -44,15 +44,23 @@ class Effort:
     How much work a cloud gets at each stage.
 
     whole clouds and one-sided views have settings of their own (a view's hypotheses are more often
-    wrong, so it gets more of them).
+    wrong, so it gets more of them; a whole cloud's principal axes and half turns find most poses,
+    so it ranks its hypotheses on fewer points and seeds from fewer candidates' features).
     """
 
     def __init__(self, opts: PoseOptions, whole: bool):
+        self.whole_matched = opts.whole_matched if whole else None
+        self.seed_points = opts.seed_points if whole else opts.coarse_points
         self.seeders = opts.seeders if whole else opts.seeders_view
         self.pool_size = opts.pool_size if whole else opts.pool_size_view
         self.vote_iterations = opts.vote_icp_iterations if whole else opts.vote_icp_iterations_view
         self.final_ratio = opts.final_ratio if whole else opts.final_ratio_view
         self.exact_ratio = opts.exact_ratio if whole else opts.exact_ratio_view
+
+    def matched(self, n_matched: int) -> int:
+        """Return how many of the first candidates get point features, of n_matched asked."""
+        # a gallery object's point features cost as much as the query's
+        return n_matched if self.whole_matched is None else min(n_matched, self.whole_matched)
 
 
 class Registrar:
@@ -80,7 +88,7 @@ class Registrar:
         self.viewpoint = viewpoint
         self.up = UpPrior(up, opts.up_tolerance_deg)
         self.effort = Effort(opts, viewpoint is None)
-        self.fitter = Fitter(query, opts, rng, viewpoint)
+        self.fitter = Fitter(query, opts, rng, viewpoint, self.effort.seed_points)
         # what the last best_pose saw that says how far to trust its answer (evidence.py)
         self.evidence = evidence.alone()
         self.averaged = 1
