@@ -27,7 +27,10 @@ answer is right when its category is and its rotation is within evidence.RIGHT_D
 object left out, also when it is that close to laying the object it answered with on the cloud
 (frames.py: a gallery whose objects disagree about which way is front defines the pose no better
 than that, and the answered object at the answered pose is what a user acts on); with the
-category left out, none is. Logistic regression on the answers' evidence (evidence.FEATURES)
+category left out, none is; nor is any answer to a random solid of a gallery object's size
+(boxes, cylinders and ellipsoids joined: sources/primitives.py), whole, one per object queried: the
+objects a robot meets that no category resembles (thin, flat or odd shapes that fit one part of a
+candidate well). Logistic regression on the answers' evidence (evidence.FEATURES)
 gives the probability that an answer is right, one regression for whole clouds and one for
 one-sided views (the same evidence means less on a view, whose right answers lack most of their
 object).
@@ -40,7 +43,7 @@ import time
 import numpy as np
 from pcrp_core.category.evidence import FEATURES, RIGHT_DEG
 from pcrp_core.category.frames import axis_turn
-from pcrp_core.geometry import rotation_angle_deg
+from pcrp_core.geometry import rms_radius, rotation_angle_deg
 
 CALIBRATION_SEED = 3_000_017
 PER_CATEGORY = 16  # objects of each category queried, at most
@@ -59,8 +62,6 @@ def calibration_queries(model, per_category: int = PER_CATEGORY, seed: int = CAL
     Up to per_category objects of each category (an eighth of it at most, TOTAL in all), whole and
     one-sided.
     """
-    from pcrp_core.sources.views import partial_view, random_rotation
-
     rng = np.random.default_rng(seed)
     cats = np.array(model.gallery.categories)
     names = sorted(set(cats))
@@ -72,16 +73,47 @@ def calibration_queries(model, per_category: int = PER_CATEGORY, seed: int = CAL
         for i in np.sort(rng.choice(members, n, replace=False)):
             cloud = model.gallery.clouds[i].astype(np.float64)
             for view in (False, True):
-                radius = np.linalg.norm(cloud - cloud.mean(0), axis=1).max()
-                part, camera = (
-                    partial_view(cloud, rng, VIEW_NOISE, with_camera=True)
-                    if view
-                    else (cloud + rng.normal(scale=WHOLE_NOISE * radius, size=cloud.shape), None)
-                )
-                R, t = random_rotation(rng), rng.uniform(-0.5, 0.5, 3) * model.radii[i]
-                vp = None if camera is None else R @ camera + t
-                out.append((int(i), np.asarray(part, dtype=np.float64) @ R.T + t, vp, R))
+                out.append((int(i), *_posed(cloud, view, rng, model.radii[i])))
     return out
+
+
+def solid_queries(model, n: int, seed: int = CALIBRATION_SEED):
+    """
+    Return (None, points, None, None) of n whole random solids, as calibration_queries poses them.
+
+    Each with a random gallery object's number of points and size (rms radius).
+    """
+    from pcrp_core.sources.primitives import random_solid
+
+    rng = np.random.default_rng([seed, 1])
+    out = []
+    for _ in range(n):
+        cloud = model.gallery.clouds[rng.integers(len(model.gallery.clouds))]
+        size = rms_radius(cloud)
+        solid = random_solid(rng, len(cloud))
+        solid *= size / max(rms_radius(solid), 1e-12)
+        points, _, _ = _posed(solid, False, rng, size)
+        out.append((None, points, None, None))
+    return out
+
+
+def _posed(cloud: np.ndarray, view: bool, rng, shift: float):
+    """
+    (points, viewpoint or None, R) of a cloud seen as a query sees it.
+
+    Whole with noise, or one side of it; turned by a random R and moved up to shift / 2 each way.
+    """
+    from pcrp_core.sources.views import partial_view, random_rotation
+
+    radius = np.linalg.norm(cloud - cloud.mean(0), axis=1).max()
+    part, camera = (
+        partial_view(cloud, rng, VIEW_NOISE, with_camera=True)
+        if view
+        else (cloud + rng.normal(scale=WHOLE_NOISE * radius, size=cloud.shape), None)
+    )
+    R, t = random_rotation(rng), rng.uniform(-0.5, 0.5, 3) * shift
+    vp = None if camera is None else R @ camera + t
+    return np.asarray(part, dtype=np.float64) @ R.T + t, vp, R
 
 
 def answer_without(model, points, viewpoint, drop, evidence_out: dict):
@@ -117,6 +149,10 @@ def answer_query(state: dict, item) -> list[tuple[dict, bool]]:
     """
     model = state['model']
     index, points, viewpoint, R = item
+    if index is None:   # a solid of no category: every answer to it is wrong
+        ev = {}
+        answer_without(model, points, viewpoint, [], ev)
+        return [(ev, False)]
     category = model.gallery.categories[index]
     same = [n for n, c in enumerate(model.gallery.categories) if c == category]
     out = []
@@ -145,6 +181,7 @@ def calibrate(model, n_jobs=None, progress=None, per_category: int = PER_CATEGOR
     from pcrp_core.parallel import parallel_map
 
     queries = calibration_queries(model, per_category)
+    queries += solid_queries(model, len(queries) // 2)
     answered = parallel_map(
         answer_query, queries, {'model': model}, n_jobs, progress, 'calibration', chunksize=4
     )

@@ -50,6 +50,8 @@ FEATURES = (
     'category_fit',
     'category_fit_ratio',
     'runner_up',
+    'fit_q90',
+    'missing_q90',
 )
 RIGHT_DEG = 15.0  # an answer this close in rotation, and of the right category, is right
 NO_RIVAL = 1.0  # the pose margin when no other pose was voted on
@@ -115,7 +117,11 @@ def both_ways(fitter, hyp, gallery, inlier_distance: float) -> dict:
     fit_tight: the share of the query's points within TIGHT inlier distances of the object (a right
     pose of a relative fits many closely, a wrong object few); missing: the mean distance from the
     object's points to the query, missing_far the share of them farther than FAR inlier distances
-    (what of the object the cloud lacks). One query of each tree, on the points scoring uses.
+    (what of the object the cloud lacks); fit_q90 and missing_q90: the distance, in inlier
+    distances, within which nine tenths of the query's points lie of the object, and of the
+    object's points of the query (a part that fits nowhere: an object from outside the gallery
+    that fits one part of a candidate, or lacks one). One query of each tree, on the points scoring
+    uses.
     """
     moved = transform_batch(fitter.src, hyp.R[None], hyp.t[None])[0]
     ahead = gallery.tree.query(moved)[0]
@@ -125,6 +131,8 @@ def both_ways(fitter, hyp, gallery, inlier_distance: float) -> dict:
         'fit_tight': float(np.mean(ahead < TIGHT * inlier_distance)),
         'missing': float(back.mean()),
         'missing_far': float(np.mean(back > FAR * inlier_distance)),
+        'fit_q90': float(np.quantile(ahead, 0.9)) / inlier_distance,
+        'missing_q90': float(np.quantile(back, 0.9)) / inlier_distance,
     }
 
 

@@ -12,10 +12,15 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Surface sampling of simple solids, area-uniform, for the procedural generator."""
+"""
+Surface sampling of simple solids, area-uniform.
+
+For the procedural generator, and for objects of no category (random_solid).
+"""
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 
 def _rot_x(a):
@@ -94,6 +99,30 @@ def sample_parts(parts, n, rng) -> np.ndarray:
     areas = np.array([p.area() for p in parts])
     counts = rng.multinomial(n, areas / areas.sum())
     return np.concatenate([p.sample(k, rng) for p, k in zip(parts, counts) if k])
+
+
+def random_solid(rng: np.random.Generator, n: int, parts: int = 3) -> np.ndarray:
+    """
+    Return (n, 3) points on one to `parts` boxes, cylinders and ellipsoids, centred.
+
+    Each part of random proportions and turn, centred on a point of the part before it: an object
+    of no category, to learn what an answer to an object no gallery holds looks like
+    (category/calibration.py).
+    """
+    solids = []
+    for _ in range(rng.integers(1, parts + 1)):
+        centre = sample_parts(solids[-1:], 1, rng)[0] if solids else np.zeros(3)
+        a, b, c = rng.uniform(0.05, 1.0, 3)
+        R = Rotation.random(random_state=rng).as_matrix()
+        kind = rng.integers(3)
+        if kind == 0:
+            solids.append(Box(centre, (a, b, c), R))
+        elif kind == 1:
+            solids.append(Cylinder(centre, a / 2, 2 * b, R))
+        else:
+            solids.append(Ellipsoid(centre, (a / 2, b / 2, c / 2)))
+    points = sample_parts(solids, n, rng)
+    return points - points.mean(0)
 
 
 ROT_X = _rot_x

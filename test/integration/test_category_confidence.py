@@ -52,6 +52,21 @@ def test_the_build_learns_a_confidence_that_is_stored_and_answers_report(small_m
     assert model.estimate(points @ R.T + t).confidence == pytest.approx(r.score)
 
 
+def test_calibration_also_asks_about_solids_no_gallery_holds_and_counts_them_wrong(small_model):
+    from pcrp_core.category.calibration import answer_query, solid_queries
+
+    model = PCRP.load(small_model)
+    solids = solid_queries(model, 3)
+    again = solid_queries(model, 3)
+    assert len(solids) == 3 and all(np.array_equal(a[1], b[1]) for a, b in zip(solids, again))
+    # whole clouds, of a gallery object's size, with nothing to be right about
+    assert all(index is None and vp is None and R is None for index, _, vp, R in solids)
+    sizes = [np.sqrt(((p - p.mean(0)) ** 2).sum(1).mean()) for _, p, _, _ in solids]
+    assert min(sizes) >= 0.5 * model.radii.min() and max(sizes) <= 2.0 * model.radii.max()
+    (evidence, right), = answer_query({'model': model}, solids[0])
+    assert right is False and set(FEATURES) <= set(evidence)
+
+
 @pytest.mark.skipif(not MODELNET.exists(), reason='needs ../shared/data/modelnet40')
 def test_objects_of_categories_outside_the_gallery_are_less_trusted_than_its_own(small_model):
     """

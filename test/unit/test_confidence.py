@@ -160,6 +160,9 @@ def test_evidence_both_ways_tells_a_whole_object_from_half_of_it_and_from_a_wron
     # (a few hundred points leave gaps in a whole one too: only more is missing, not none)
     assert half['missing_far'] > whole['missing_far'] + 0.2
     assert half['missing'] > 2 * whole['missing']
+    assert half['missing_q90'] > 2 * whole['missing_q90']
+    assert half['fit_q90'] == pytest.approx(whole['fit_q90'], abs=0.5)
     quarter = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
     turned = evidence_of(gallery, gallery, quarter)
     assert turned['fit_tight'] < 0.5 and turned['missing_far'] > whole['missing_far'] + 0.2
+    assert turned['fit_q90'] > 2 * whole['fit_q90']

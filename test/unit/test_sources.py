@@ -17,6 +17,7 @@ from helpers import MODELNET
 import numpy as np
 import open3d as o3d
 from pcrp_core.sources import load_source, load_sources
+from pcrp_core.sources.primitives import random_solid
 from pcrp_core.sources.procedural import CATEGORIES, generate_object
 from pcrp_core.sources.views import crop_half_plane, partial_view, random_rotation, sensor_view
 from pcrp_core.visibility import visible_from
@@ -37,6 +38,17 @@ def test_generated_objects_are_deterministic_varied_normalised_and_have_a_front(
     assert np.linalg.norm(a, axis=1).max() == pytest.approx(1.0, abs=1e-5)
     turned = a * [-1, -1, 1]   # half turn about z: a pose must be told from this
     assert cKDTree(a).query(turned)[0].mean() > 0.03
+
+
+def test_random_solids_are_seeded_centred_and_of_varied_shape():
+    first = [random_solid(np.random.default_rng(s), 500) for s in range(12)]
+    again = random_solid(np.random.default_rng(0), 500)
+    np.testing.assert_array_equal(first[0], again)
+    assert all(p.shape == (500, 3) and np.abs(p.mean(0)).max() < 1e-9 for p in first)
+    # proportions: from rods and plates to near-balls, not one shape twelve times
+    spread = [np.sqrt(np.linalg.eigvalsh(np.cov(p.T))) for p in first]
+    flatness = [s[0] / s[2] for s in spread]
+    assert min(flatness) < 0.3 and max(flatness) > 0.5
 
 
 def test_procedural_train_and_test_splits_differ_and_ids_are_unique():
