@@ -157,48 +157,55 @@ def _published(stdout: str) -> int:
 
 # -- running the catalogues -----------------------------------------------------------------------
 def run_cases(model) -> list[tuple]:
-    from pcrp_ros.node import PcrpNode
-    from pcrp_ros.spinning import ros_context, spinning
-    import rclpy
     from tools.bad_clouds import accepted, CaseRunner, CASES, judged_good_cloud
 
-    rows = []
-    with ros_context() as ctx:
-        node = PcrpNode(model=model, context=ctx)
-        client = rclpy.create_node('pcrp_robustness', context=ctx)
-        runner = CaseRunner(node, client, judged_good_cloud(model))
-        with spinning(ctx, node, client):
-            if not runner.ready():
-                raise RuntimeError('the node did not answer a good cloud within a minute')
-            for case in CASES:
-                out = runner.run(case)
-                rows.append((case, out, accepted(case, out)))
-                print(
-                    f'  {case.name:18s} {out.outcome:28s} next good cloud: {out.next_good}',
-                    flush=True,
-                )
-    return rows
+    def line(case, out):
+        return f'  {case.name:18s} {out.outcome:28s} next good cloud: {out.next_good}'
+
+    return _battery(model, None, 'pcrp_robustness',
+                    lambda node, client: CaseRunner(node, client, judged_good_cloud(model)),
+                    'the node did not answer a good cloud within a minute', CASES, accepted, line)
 
 
 def run_scene_cases(model) -> list[tuple]:
+    from tools.bad_scenes import accepted, camera_frame, CASES, node_parameters, SceneCaseRunner
+
+    def line(case, out):
+        return (f'  {case.name:18s} {out.counted:32s} cloud {out.cloud}, '
+                f'next good frame: {out.next_good}')
+
+    # CASES in order: the first needs a node that has had no CameraInfo
+    return _battery(model, node_parameters(), 'pcrp_scene_robustness',
+                    lambda node, client: SceneCaseRunner(node, client, camera_frame(model)),
+                    'the node did not subscribe its scene topics within 30 s', CASES, accepted,
+                    line)
+
+
+def _battery(model, overrides, client_name: str, make_runner, not_ready: str, cases,
+             accepted, line) -> list[tuple]:
+    """
+    Return (case, outcome, accepted) of each case run, in order, on one node.
+
+    The node runs with overrides (its parameter_overrides, or None) beside a client node;
+    make_runner(node, client) gives the battery's runner; not_ready is the error when the node
+    never gets ready; line(case, outcome) is what is printed of each.
+    """
     from pcrp_ros.node import PcrpNode
     from pcrp_ros.spinning import ros_context, spinning
     import rclpy
-    from tools.bad_scenes import accepted, camera_frame, CASES, node_parameters, SceneCaseRunner
 
     rows = []
     with ros_context() as ctx:
-        node = PcrpNode(model=model, context=ctx, parameter_overrides=node_parameters())
-        client = rclpy.create_node('pcrp_scene_robustness', context=ctx)
-        runner = SceneCaseRunner(node, client, camera_frame(model))
+        node = PcrpNode(model=model, context=ctx, parameter_overrides=overrides)
+        client = rclpy.create_node(client_name, context=ctx)
+        runner = make_runner(node, client)
         with spinning(ctx, node, client):
             if not runner.ready():
-                raise RuntimeError('the node did not subscribe its scene topics within 30 s')
-            for case in CASES:   # in order: the first needs a node that has had no CameraInfo
+                raise RuntimeError(not_ready)
+            for case in cases:
                 out = runner.run(case)
                 rows.append((case, out, accepted(case, out)))
-                print(f'  {case.name:18s} {out.counted:32s} cloud {out.cloud}, '
-                      f'next good frame: {out.next_good}', flush=True)
+                print(line(case, out), flush=True)
     return rows
 
 
