@@ -550,7 +550,8 @@ def confidence_md(conf: dict, out: Path) -> list[str]:
         '',
         "Each answer's confidence is the probability, learnt when the model was built on its own "
         'train objects (each queried as it is, with itself left out of the gallery, and with its '
-        'whole category left out; `pcrp_core/category/calibration.py`), that the answer is right: '
+        'whole category left out, and random solids of no category beside them; '
+        '`pcrp_core/category/calibration.py`), that the answer is right: '
         f'the right category and a rotation within {pcrp_right_deg():.0f}° of the labels, or of '
         'laying the gallery object it answered with on the cloud (where the objects of a category '
         "disagree about which way is front, as this copy's airplanes and cars do, the answered "
