@@ -245,14 +245,17 @@ def fit_split_calibration(
     """
     y = np.asarray(labels, dtype=bool)
     kind = np.array([s[key] >= 0.5 for s in samples], dtype=bool)
-    parts = []
+    parts, pooled = [], None
     for value in (False, True):
         mine = kind == value
         if 0 < y[mine].sum() < mine.sum():
             mine_samples = [s for s, m in zip(samples, mine) if m]
             parts.append(fit_calibration(mine_samples, y[mine], names, regularisation))
-        else:   # nothing to tell apart within the kind: what all samples say
-            parts.append(fit_calibration(samples, y, names, regularisation))
+            continue
+        # nothing to tell apart within the kind: what all samples say, fitted once for both
+        if pooled is None:
+            pooled = fit_calibration(samples, y, names, regularisation)
+        parts.append(pooled)
     return SplitCalibration(key, tuple(parts))
 
 

@@ -52,9 +52,11 @@ def write_model(path, meta: dict, arrays: dict) -> Path:
     path.mkdir(parents=True, exist_ok=True)
     arrays_path = path / ARRAYS_FILE
     np.savez_compressed(arrays_path, **arrays)
-    meta = {'format': FORMAT, 'format_version': FORMAT_VERSION, **meta}
-    # the format this code writes, whatever a model read from an older file says it had
-    meta.update(format=FORMAT, format_version=FORMAT_VERSION, arrays_sha256=_sha256(arrays_path))
+    # the format this code writes, first, whatever a model read from an older file says it had
+    own = ('format', 'format_version', 'arrays_sha256')
+    meta = {'format': FORMAT, 'format_version': FORMAT_VERSION,
+            **{k: v for k, v in meta.items() if k not in own},
+            'arrays_sha256': _sha256(arrays_path)}
     (path / META_FILE).write_text(json.dumps(meta, indent=1))
     return path
 

@@ -62,6 +62,10 @@ def test_a_kind_with_answers_all_right_falls_back_to_the_pooled_regression():
     pooled = fit_calibration(samples, right, ('x',))
     np.testing.assert_array_equal(split.parts[1].coef, pooled.coef)
     assert not np.array_equal(split.parts[0].coef, pooled.coef)
+    # both kinds all one way or the other: one pooled regression reads both
+    one_each = np.array([s['kind'] > 0.5 for s in samples])
+    both = fit_split_calibration(samples, one_each, ('x',), 'kind')
+    assert both.parts[0] is both.parts[1]
 
 
 def test_calibrations_come_back_from_their_arrays_as_they_were_stored():
