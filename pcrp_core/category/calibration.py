@@ -181,6 +181,7 @@ def calibrate(model, n_jobs=None, progress=None, per_category: int = PER_CATEGOR
     from pcrp_core.parallel import parallel_map
 
     queries = calibration_queries(model, per_category)
+    # as many solids as objects queried (each object is asked whole and as a view)
     queries += solid_queries(model, len(queries) // 2)
     answered = parallel_map(
         answer_query, queries, {'model': model}, n_jobs, progress, 'calibration', chunksize=4

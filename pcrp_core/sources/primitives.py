@@ -20,7 +20,6 @@ For the procedural generator, and for objects of no category (random_solid).
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 
 def _rot_x(a):
@@ -105,15 +104,17 @@ def random_solid(rng: np.random.Generator, n: int, parts: int = 3) -> np.ndarray
     """
     Return (n, 3) points on one to `parts` boxes, cylinders and ellipsoids, centred.
 
-    Each part of random proportions and turn, centred on a point of the part before it: an object
-    of no category, to learn what an answer to an object no gallery holds looks like
-    (category/calibration.py).
+    Each part of random proportions (boxes and cylinders also turned; an ellipsoid keeps its axes),
+    centred on a point of the part before it: an object of no category, to learn what an answer to
+    an object no gallery holds looks like (category/calibration.py).
     """
+    from pcrp_core.sources.views import random_rotation
+
     solids = []
     for _ in range(rng.integers(1, parts + 1)):
         centre = sample_parts(solids[-1:], 1, rng)[0] if solids else np.zeros(3)
         a, b, c = rng.uniform(0.05, 1.0, 3)
-        R = Rotation.random(random_state=rng).as_matrix()
+        R = random_rotation(rng)   # drawn for every part, so each kind draws alike
         kind = rng.integers(3)
         if kind == 0:
             solids.append(Box(centre, (a, b, c), R))
