@@ -150,7 +150,7 @@ class QueryOptions(Options):
     n_matched: int = setting(
         2,
         'Of those, the first ones whose point features seed RANSAC hypotheses (whole '
-        'clouds: at most the pose setting whole_matched).',
+        'clouds: at most the pose setting whole_matched, by default none).',
         low=1,
         high=50,
     )
@@ -257,10 +257,10 @@ class PoseOptions(Options):
     )
     seeders_view: int = setting(0, 'The same for clouds from a sensor.', low=0)
     whole_matched: int = setting(
-        1,
+        0,
         'Whole clouds: of the n_matched first candidates, how many seed RANSAC hypotheses from '
-        'their point features (principal axes and half turns find most of the same poses; the '
-        "features tell a known object from its half turn). 0: none, the gallery's features are "
+        'their point features (principal axes and half turns find the same poses, and a gallery '
+        "object's features cost as much as the query's). 0: none, the gallery's features are "
         'never computed.',
         low=0,
         high=50,
@@ -288,6 +288,15 @@ class PoseOptions(Options):
         6, 'Whole clouds: ICP iterations per hypothesis and candidate before the vote.', low=0
     )
     vote_icp_iterations_view: int = setting(6, 'The same for clouds from a sensor.', low=0)
+    vote_survivors: int = setting(
+        2,
+        'Whole clouds: hypotheses the vote refines in full, after a first round has ranked the '
+        'pool on every candidate (0: all of them, in one round).',
+        low=0,
+    )
+    vote_first_iterations: int = setting(
+        2, "Whole clouds: ICP iterations of the vote's first round, on the seed points.", low=0
+    )
     icp_tolerance: float = setting(
         1e-6, 'ICP stops once the trimmed mean squared error gains less.', low=0.0
     )

@@ -54,6 +54,8 @@ class Effort:
         self.seeders = opts.seeders if whole else opts.seeders_view
         self.pool_size = opts.pool_size if whole else opts.pool_size_view
         self.vote_iterations = opts.vote_icp_iterations if whole else opts.vote_icp_iterations_view
+        # (survivors, first-round iterations) of the vote: measured on whole clouds only
+        self.vote_rounds = (opts.vote_survivors, opts.vote_first_iterations) if whole else (0, 0)
         self.final_ratio = opts.final_ratio if whole else opts.final_ratio_view
         self.exact_ratio = opts.exact_ratio if whole else opts.exact_ratio_view
 
@@ -140,7 +142,13 @@ class Registrar:
             self.evidence, self.averaged = evidence.alone(final.chamfer), 1
             return 0, final
         k, votes, ch = vote(
-            fitter, pool, verifiers, effort.vote_iterations, groups, effort.exact_ratio
+            fitter,
+            pool,
+            verifiers,
+            effort.vote_iterations,
+            groups,
+            effort.exact_ratio,
+            *effort.vote_rounds,
         )
         self.evidence = evidence.from_vote(ch, groups, k, opts.consensus_weight)
         best = pool[k]

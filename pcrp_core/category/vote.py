@@ -48,9 +48,16 @@ def vote_scores(ch: np.ndarray, voters: np.ndarray, weight: float) -> np.ndarray
     return ch.min(axis=1) / own_best.min() + weight * np.median(ch[:, voters] / own_best, axis=1)
 
 
-def choose(ch: np.ndarray, voters: np.ndarray, weight: float) -> int:
-    """Return the index of the hypothesis the candidates choose, by vote_scores."""
-    return int(np.argmin(vote_scores(ch, voters, weight)))
+def choose(ch: np.ndarray, voters: np.ndarray, weight: float, among=None) -> int:
+    """
+    Return the index of the hypothesis the candidates choose, by vote_scores.
+
+    among: the indices of the hypotheses that may be chosen (all when None); every row of ch still
+    counts in each candidate's own best.
+    """
+    scores = vote_scores(ch, voters, weight)
+    among = np.arange(len(scores)) if among is None else np.asarray(among)
+    return int(among[np.argmin(scores[among])])
 
 
 def voting_candidates(ch: np.ndarray, groups) -> np.ndarray:
@@ -72,24 +79,58 @@ def vote(
     iterations: int,
     groups,
     exact_ratio: float,
+    survivors: int = 0,
+    first_iterations: int = 0,
 ) -> tuple[int, list[list[Hypothesis]], np.ndarray]:
     """
     Run the vote.
 
     Return (index into pool of the chosen hypothesis, each candidate's refined hypotheses, their
     (hypotheses, candidates) chamfers).
+
+    survivors > 0 (fewer than the pool): a first round refines every hypothesis on every candidate
+    by first_iterations on the seed points and ranks them by vote_scores; only the best survivors
+    (and the best fit on any one candidate) are refined in full and may be chosen. The others keep
+    their first-round fits, which still count in each candidate's own best (vote_scores) and are
+    what evidence.from_vote sees of them: most of the vote's cost was the full ICP of hypotheses
+    the first round already rules out.
     """
     opts = fitter.opts
     Rs, ts = [h.R for h in pool], [h.t for h in pool]
-    votes = [fitter.refine_many(Rs, ts, g, iterations, [''] * len(pool)) for g in verifiers]
-    ch = np.array([[h.chamfer for h in row] for row in votes]).T
-    # the candidates' vote decides...
-    k = choose(ch, voting_candidates(ch, groups), opts.consensus_weight)
+    keep = np.arange(len(pool))
+    if 0 < survivors < len(pool):
+        votes = [
+            fitter.refine_many(Rs, ts, g, first_iterations, [''] * len(pool), 'seed')
+            for g in verifiers
+        ]
+        first = _chamfers(votes)
+        scores = vote_scores(first, voting_candidates(first, groups), opts.consensus_weight)
+        # and the one that fits some candidate best: the very object's pose, when the gallery
+        # holds it, which the exact-fit rule below must still be able to choose
+        keep = np.union1d(
+            np.argsort(scores, kind='stable')[:survivors], np.argmin(first.min(axis=1))
+        )
+    else:
+        votes = [[None] * len(pool) for _ in verifiers]
+    for row, g in zip(votes, verifiers):
+        refined = fitter.refine_many(
+            [Rs[k] for k in keep], [ts[k] for k in keep], g, iterations, [''] * len(keep)
+        )
+        for k, h in zip(keep, refined):
+            row[k] = h
+    ch = _chamfers(votes)
+    # the candidates' vote decides, among the survivors...
+    k = choose(ch, voting_candidates(ch, groups), opts.consensus_weight, keep)
     # ...unless one candidate explains the cloud far better than every other: then it is the
     # very object (a gallery of known objects), and relatives turned otherwise must not outvote
     # it. Stricter for clouds from a sensor: a partial cloud fits some wrong pose of one
     # candidate closely often enough that only a wide margin, or else the consensus, decides.
     per_candidate = np.sort(ch.min(axis=0))
     if len(per_candidate) > 1 and per_candidate[0] < exact_ratio * per_candidate[1]:
-        k = int(np.argmin(ch.min(axis=1)))
+        k = int(keep[np.argmin(ch[keep].min(axis=1))])
     return k, votes, ch
+
+
+def _chamfers(votes: list[list[Hypothesis]]) -> np.ndarray:
+    """(hypotheses, candidates) chamfers of each candidate's row of refined hypotheses."""
+    return np.array([[h.chamfer for h in row] for row in votes]).T

@@ -288,3 +288,29 @@ def test_whole_clouds_rank_hypotheses_on_fewer_points_and_fewer_candidates_featu
     # candidate's features. A view: its hypotheses on the vote's points, three candidates' features
     assert whole == ({40, 200, 256}, 1)
     assert (set(points), sum(featured)) == ({200, 256}, 3)
+
+
+def test_the_vote_refines_in_full_only_the_survivors_of_its_first_round(model, monkeypatch):
+    from pcrp_core.category import fitting
+    from pcrp_core.geometry import rotation_angle_deg
+    batches = []
+    icp = fitting.icp_batch
+    monkeypatch.setattr(
+        fitting,
+        'icp_batch',
+        lambda *args, **kw: batches.append((len(args[0]), len(args[3]))) or icp(*args, **kw),
+    )
+    cloud = model.gallery_cloud(model.gallery_ids[0]).astype(np.float64)
+    answers, vote_sizes = [], []
+    for survivors in (0, 2):
+        batches[:] = []
+        variant = model.with_options(
+            seed_points=40, coarse_points=200, vote_survivors=survivors, vote_first_iterations=1
+        )
+        answers.append(variant.estimate(cloud))
+        # the vote's full rounds are its ICP runs on the coarse points (200)
+        vote_sizes.append({n for points, n in batches if points == 200})
+    # two by the first round's scores, and the best fit on any one candidate if not one of them
+    assert max(vote_sizes[0]) > 3 and vote_sizes[1] and vote_sizes[1] <= {2, 3}
+    assert answers[0].gallery_id == answers[1].gallery_id
+    assert rotation_angle_deg(answers[0].rotation, answers[1].rotation) < 1.0
