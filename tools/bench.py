@@ -52,11 +52,11 @@ STAGES = {
     'vlad': 'VLAD vector',
     'features': "= the query's features in all",
     'retrieval': 'nearest VLAD vectors in the gallery',
-    'gallery_features': "the retrieved objects' features (cached across queries)",
+    'gallery_features': "the retrieved objects' features, where they seed RANSAC (cached)",
     'correspondences': 'feature matches within symmetry halves',
     'ransac': 'Procrustes in RANSAC',
     'hypotheses': 'principal-axis, half-turn and (for sensor clouds) view hypotheses, coarse ICP',
-    'verification': 'every hypothesis scored on every candidate (the vote)',
+    'verification': 'the vote: every hypothesis briefly on every candidate, the best in full',
     'refinement': 'final ICP, pose averaging, the mirror-plane finish',
     'registration': '= everything after retrieval',
     'total': 'end to end',
@@ -656,9 +656,9 @@ def why_unmet(res: dict) -> list[str]:
     if single and missed(0):
         out.append(
             f'**Why a query misses its target.** {reg:.0f} of its {tot:.0f} ms are registration: '
-            'hypotheses from each of the retrieved candidates (RANSAC on feature matches, '
-            'principal axes, half turns, each with a short ICP) and the vote that scores every '
-            'hypothesis on every candidate.'
+            'hypotheses from each of the retrieved candidates (principal axes and half turns, '
+            'each with a short ICP) and the vote that refines them on every candidate, briefly '
+            'and then the best two in full.'
             + _what_time_buys(single[0]['methods'])
         )
     if res.get('node') and missed(2):
