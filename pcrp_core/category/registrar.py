@@ -45,7 +45,8 @@ class Effort:
 
     whole clouds and one-sided views have settings of their own (a view's hypotheses are more often
     wrong, so it gets more of them; a whole cloud's principal axes and half turns find most poses,
-    so it ranks its hypotheses on fewer points and seeds from fewer candidates' features).
+    so it ranks its hypotheses on fewer points, seeds from fewer candidates' features, none by
+    default, and refines in full only the hypotheses a first round of the vote keeps).
     """
 
     def __init__(self, opts: PoseOptions, whole: bool):
