@@ -150,7 +150,7 @@ class QueryOptions(Options):
     n_matched: int = setting(
         2,
         'Of those, the first ones whose point features seed RANSAC hypotheses (whole '
-        'clouds: at most the pose setting whole_matched, by default none).',
+        'clouds: at most the pose setting whole_matched, and only for a near twin).',
         low=1,
         high=50,
     )
@@ -257,13 +257,21 @@ class PoseOptions(Options):
     )
     seeders_view: int = setting(0, 'The same for clouds from a sensor.', low=0)
     whole_matched: int = setting(
-        0,
+        1,
         'Whole clouds: of the n_matched first candidates, how many seed RANSAC hypotheses from '
-        'their point features (principal axes and half turns find the same poses, and a gallery '
-        "object's features cost as much as the query's). 0: none, the gallery's features are "
-        'never computed.',
+        "their point features (a gallery object's features cost as much as the query's), and "
+        'only when retrieval found a near twin (whole_matched_ratio). 0: never.',
         low=0,
         high=50,
+    )
+    whole_matched_ratio: float = setting(
+        0.92,
+        "Whole clouds: the first candidates get point features only when the first's retrieval "
+        "distance is at most this share of the second's: a known object's own descriptor sits "
+        'apart, and its features tell its pose from a turn that fits its relatives as well; '
+        'for an unseen instance principal axes and half turns find the same poses (1: always).',
+        low=0.0,
+        high=1.0,
     )
     pool_size: int = setting(6, 'Whole clouds: distinct rotations that go to the vote.', low=1)
     pool_size_view: int = setting(6, 'The same for clouds from a sensor.', low=1)
@@ -493,6 +501,7 @@ PAPER_POSE = PoseOptions(
     seeders=1,
     seeders_view=1,
     whole_matched=1,
+    whole_matched_ratio=1.0,
     seed_points=256,
     reverse_weight=0.0,
 )

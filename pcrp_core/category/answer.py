@@ -88,7 +88,7 @@ def answer(
         up_pair,
     )
     top = [int(i) for i in idx[:n_candidates]]
-    n_matched = registrar.effort.matched(opts.n_matched)
+    n_matched = registrar.effort.matched(opts.n_matched, dist)
     matched = [model.prepared.get(i, True, opts.cache_size) for i in top[:n_matched]]
     verifiers = matched + [model.prepared.get(i, False, opts.cache_size) for i in top[n_matched:]]
     j, h = registrar.best_pose(matched, verifiers, [model.gallery.categories[i] for i in top])

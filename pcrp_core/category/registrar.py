@@ -45,12 +45,14 @@ class Effort:
 
     whole clouds and one-sided views have settings of their own (a view's hypotheses are more often
     wrong, so it gets more of them; a whole cloud's principal axes and half turns find most poses,
-    so it ranks its hypotheses on fewer points, seeds from fewer candidates' features, none by
-    default, and refines in full only the hypotheses a first round of the vote keeps).
+    so it ranks its hypotheses on fewer points, seeds from a candidate's features only when
+    retrieval found a near twin, and refines in full only the hypotheses a first round of the vote
+    keeps).
     """
 
     def __init__(self, opts: PoseOptions, whole: bool):
         self.whole_matched = opts.whole_matched if whole else None
+        self.twin_ratio = opts.whole_matched_ratio
         self.seed_points = opts.seed_points if whole else opts.coarse_points
         self.seeders = opts.seeders if whole else opts.seeders_view
         self.pool_size = opts.pool_size if whole else opts.pool_size_view
@@ -60,10 +62,18 @@ class Effort:
         self.final_ratio = opts.final_ratio if whole else opts.final_ratio_view
         self.exact_ratio = opts.exact_ratio if whole else opts.exact_ratio_view
 
-    def matched(self, n_matched: int) -> int:
-        """Return how many of the first candidates get point features, of n_matched asked."""
-        # a gallery object's point features cost as much as the query's
-        return n_matched if self.whole_matched is None else min(n_matched, self.whole_matched)
+    def matched(self, n_matched: int, distances) -> int:
+        """
+        Return how many of the first candidates get point features, of n_matched asked.
+
+        distances: the retrieved candidates' descriptor distances, nearest first.
+        """
+        if self.whole_matched is None:
+            return n_matched
+        # a gallery object's point features cost as much as the query's: worth it for a whole
+        # cloud only when retrieval found a near twin (config.whole_matched_ratio)
+        twin = len(distances) < 2 or distances[0] <= self.twin_ratio * distances[1]
+        return min(n_matched, self.whole_matched) if twin else 0
 
 
 class Registrar:

@@ -273,3 +273,15 @@ def test_snap_lays_the_query_plane_on_the_gallery_plane_with_the_least_turn():
     # the turn is the plane's tilt and no more
     tilt = np.degrees(np.arccos(np.clip((R @ normal) @ target.normal, -1, 1)))
     assert tilt > 0.5 and abs(rotation_error_deg(R2, R) - tilt) < 1e-6
+
+
+def test_a_whole_cloud_gets_candidate_features_only_when_retrieval_found_a_near_twin():
+    from pcrp_core.category.registrar import Effort
+    from pcrp_core.config import PoseOptions
+    opts = PoseOptions(whole_matched=1, whole_matched_ratio=0.9)
+    whole, view = Effort(opts, whole=True), Effort(opts, whole=False)
+    # a known object's descriptor sits well apart from the rest; an unseen one's among them
+    assert whole.matched(2, np.array([0.5, 1.0, 1.1])) == 1
+    assert whole.matched(2, np.array([0.95, 1.0, 1.1])) == 0
+    assert view.matched(2, np.array([0.95, 1.0, 1.1])) == 2
+    assert Effort(opts.replace(whole_matched_ratio=1.0), True).matched(2, [1.0, 1.0]) == 1
