@@ -285,7 +285,8 @@ def test_whole_clouds_rank_hypotheses_on_fewer_points_and_fewer_candidates_featu
     part, camera = partial_view(cloud, np.random.default_rng(5), 0.0, with_camera=True)
     variant.estimate(part, viewpoint=camera)
     # a whole cloud: hypotheses on 40 points, the vote on 200, the final refinement on all 256; one
-    # candidate's features. A view: its hypotheses on the vote's points, three candidates' features
+    # candidate's features (retrieval finds the cloud's own object, a twin). A view: its hypotheses
+    # on the vote's points, three candidates' features
     assert whole == ({40, 200, 256}, 1)
     assert (set(points), sum(featured)) == ({200, 256}, 3)
 
