@@ -654,11 +654,15 @@ def why_unmet(res: dict) -> list[str]:
         'median_ms', 0
     )
     if single and missed(0):
+        from pcrp_core.config import PoseOptions
+
+        survivors = PoseOptions().vote_survivors
         out.append(
             f'**Why a query misses its target.** {reg:.0f} of its {tot:.0f} ms are registration: '
             'hypotheses from each of the retrieved candidates (principal axes and half turns, '
-            'each with a short ICP) and the vote that refines them on every candidate, briefly '
-            'and then the best two in full.'
+            'each with a short ICP; RANSAC too where retrieval finds a near twin) and the vote '
+            'that refines them on every candidate, briefly and then the best '
+            f'{survivors} in full.'
             + _what_time_buys(single[0]['methods'])
         )
     if res.get('node') and missed(2):
