@@ -224,6 +224,16 @@ def test_a_second_instance_answers_alongside_with_its_own_diagnostics(model):
         np.testing.assert_allclose(np.abs(q @ q[0]), 1.0, atol=1e-6)
 
 
+def why_the_soak_failed(failed, result, lines=60) -> str:
+    """Say what failed with the node's exit code and log's end: a test machine's /tmp is gone."""
+    from pathlib import Path
+    logs = sorted(Path(result['node_log']).glob('*.log')) if result['node_log'] else []
+    tail = [ln for p in logs for ln in p.read_text(errors='replace').splitlines()][-lines:]
+    return '\n'.join([f'failed: {failed}', f"per topic: {result['per_topic']}",
+                      f"exit code on Ctrl-C: {result['exit_code']}",
+                      f"the node's log ({result['node_log']}), its last {lines} lines:", *tail])
+
+
 @pytest.mark.slow
 def test_a_short_soak_accounts_for_every_cloud(capsys):
     from tools.soak import run
@@ -231,7 +241,7 @@ def test_a_short_soak_accounts_for_every_cloud(capsys):
     # effort loses whole 200 KB clouds on the way when a shared 2-core machine stalls
     result = run(duration=15.0, rate=5.0, n_topics=2, bad_share=0.3, reliable=True)
     failed = [name for name, ok in result['checks'].items() if not ok]
-    assert not failed, (failed, result['per_topic'], result['node_log'])
+    assert not failed, why_the_soak_failed(failed, result)
     # memory is for runs of a minute or more to judge (the robustness battery's soak: ten)
     assert not any(name.startswith('resident memory') for name in result['checks'])
     assert result['node_log'] is None   # a run that passed leaves no logs behind
@@ -247,7 +257,7 @@ def test_a_short_soak_with_depth_clouds_answers_with_them_and_accounts_for_every
     from tools.soak import run
     result = run(duration=10.0, rate=5.0, n_topics=1, bad_share=0.3, reliable=True, scene='points')
     failed = [name for name, ok in result['checks'].items() if not ok]
-    assert not failed, (failed, result['per_topic'], result['node_log'])
+    assert not failed, why_the_soak_failed(failed, result)
     (d,) = result['per_topic'].values()
     # every good cloud estimated was answered with its frame's depth cloud or counted without
     assert d['scene_used'] > 0 and d['sent_bad'] > 0 and d['answered'] > 0
