@@ -29,12 +29,13 @@ import sys
 
 from pcrp_core import ModelError
 from pcrp_ros.answering import CloudAnswerer
-from pcrp_ros.spinning import node_executor
+from pcrp_ros.spinning import node_executor, spin_until_interrupted, stop_on_signals
 from pcrp_ros.workers import WorkerStartError
 import rclpy
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 
 # what stops a node at start-up with one line: a broken model, a mistyped parameter or topic
 START_ERRORS = (ModelError, ValueError, ParameterException, NameValidationException,
@@ -82,7 +83,13 @@ def run(make_node, program: str, args=None) -> int:
     faulthandler.enable(all_threads=True)
     if hasattr(signal, 'SIGUSR1'):
         faulthandler.register(signal.SIGUSR1, all_threads=True)
-    rclpy.init(args=args)
+    # Not rclpy's signal handlers: they shut the context down at Ctrl-C, with the node's
+    # publishers and subscriptions still in it, and Fast DDS then deletes them against a context
+    # that is gone. On a loaded machine that crashed the node now and then (SIGSEGV in a DDS
+    # thread while the node destroyed a publisher). Here Ctrl-C and SIGTERM stop the executor
+    # only; the node is destroyed before the context is shut down, as ROS 2 expects.
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop_on_signals()
     # The executor exists before the node says it is listening: a Ctrl-C that lands while an
     # executor is being built leaves a half-made object whose __del__ prints a traceback. Several
     # threads: ~/reload_model waits for the new model while clouds keep arriving.
@@ -91,17 +98,17 @@ def run(make_node, program: str, args=None) -> int:
     try:
         node = make_node()
         executor.add_node(node)
-        executor.spin()
+        spin_until_interrupted(executor)
     except START_ERRORS as e:
         print(f'{program}: error: {e}', file=sys.stderr)
         return 1
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RuntimeError:
-        # Ctrl-C shuts the context down from rclpy's signal handler, asynchronously: if that lands
-        # between the executor's check of the context and its making the next wait set, rcl
-        # refuses the wait set (RCLError, a RuntimeError) instead of the executor stopping. That
-        # is the same Ctrl-C; anything raised while the context is still up is a real failure.
+        # Something else shut the context down (rclpy.shutdown() elsewhere in the process): if
+        # that lands between the executor's check of the context and its making the next wait
+        # set, rcl refuses the wait set (RCLError, a RuntimeError) instead of the executor
+        # stopping. Anything raised while the context is still up is a real failure.
         if rclpy.ok():
             raise
     finally:

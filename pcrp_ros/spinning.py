@@ -15,12 +15,14 @@
 """
 The executor pcrp nodes spin on, and spinning them on a thread of this process.
 
-`pcrp_node` spins on node_executor(); tests, the demo and the robustness report spin the node
-next to a client with spinning(), in a context of their own.
+`pcrp_node` spins on node_executor() until interrupted (spin_until_interrupted); tests, the demo
+and the robustness report spin the node next to a client with spinning(), in a context of their
+own.
 """
 from __future__ import annotations
 
 from contextlib import contextmanager
+import signal
 import threading
 import time
 
@@ -43,6 +45,46 @@ CALLBACK_THREADS = 64
 def node_executor(context=None) -> MultiThreadedExecutor:
     """Return the executor to spin pcrp nodes on (see CALLBACK_THREADS)."""
     return MultiThreadedExecutor(num_threads=CALLBACK_THREADS, context=context)
+
+
+def spin_until_interrupted(executor, step: float = 0.2) -> None:
+    """
+    Spin the executor on a thread until Ctrl-C or SIGTERM, then stop it; re-raise what it raised.
+
+    The main thread waits, so a signal reaches it at once as KeyboardInterrupt (stop_on_signals)
+    and never inside the executor's own code. The executor looks for the stop every step
+    seconds: a wake alone does not end its wait, and rclpy's spin_until_future_complete adds a
+    callback to the future at every turn, which a node spinning for days would pile up.
+    """
+    stop = threading.Event()
+    failed = []
+
+    def spin():
+        try:
+            while not stop.is_set() and executor.context.ok():
+                executor.spin_once(timeout_sec=step)
+        except BaseException as e:   # told to the main thread, which decides
+            failed.append(e)
+
+    thread = threading.Thread(target=spin, name='executor', daemon=True)
+    thread.start()
+    try:
+        while thread.is_alive():
+            thread.join(0.5)
+    finally:
+        stop.set()
+        thread.join(5.0)
+    if failed:
+        raise failed[0]
+
+
+def stop_on_signals() -> None:
+    """Make SIGTERM end the program as Ctrl-C does (KeyboardInterrupt), in the main thread."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    signal.signal(signal.SIGTERM, interrupt)
+    signal.signal(signal.SIGINT, interrupt)
 
 
 @contextmanager

@@ -19,6 +19,8 @@ Every bad cloud of the catalogue over DDS, every broken model file at start-up, 
 instances that come and go, and a short soak. The same catalogues write
 docs/results/ROBUSTNESS.md.
 """
+import signal
+
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
@@ -88,20 +90,23 @@ def test_a_broken_model_stops_the_node_and_the_cli_with_one_clear_line(fault, tm
         )
 
 
-# run() with an executor that meets the Ctrl-C race: rclpy's signal handler shuts the context
-# down while the executor is between checking it and making its next wait set, and rcl refuses
-# the wait set. In a process of its own: run() owns the default context.
-CTRL_C_RACE = """
+# run() with an executor that meets a shutdown race: something else in the process shuts the
+# context down while the executor is between checking it and making its next wait set, and rcl
+# refuses the wait set. In a process of its own: run() owns the default context.
+CONTEXT_RACE = """
 import sys
 import rclpy
+from rclpy.utilities import get_default_context
 from pcrp_ros import node
 
 
 class Racing:
+    context = property(lambda self: get_default_context())
+
     def add_node(self, n):
         pass
 
-    def spin(self):
+    def spin_once(self, timeout_sec=None):
         if sys.argv[1] == 'shut':
             rclpy.shutdown()
         raise RuntimeError('failed to initialize wait set: the given context is not valid')
@@ -121,15 +126,64 @@ sys.exit(node.run(Quiet, 'pcrp_node'))
 
 
 @pytest.mark.parametrize('context', ['shut', 'up'])
-def test_a_ctrl_c_that_races_the_executor_stops_the_node_quietly_and_nothing_else_does(context):
+def test_a_context_shut_down_under_the_executor_stops_the_node_quietly_and_nothing_else_does(
+        context):
     import subprocess
     import sys
-    result = subprocess.run([sys.executable, '-c', CTRL_C_RACE, context], capture_output=True,
+    result = subprocess.run([sys.executable, '-c', CONTEXT_RACE, context], capture_output=True,
                             text=True, timeout=60)
     if context == 'shut':
         assert result.returncode == 0 and 'Traceback' not in result.stderr, result.stderr
     else:
         assert result.returncode != 0 and 'failed to initialize wait set' in result.stderr
+
+
+# run() with a node that says, once spinning, that it is, and whether the context is still up
+# when it is destroyed: Fast DDS deletes a node's publishers safely only while it is.
+ORDERLY_STOP = """
+import sys
+import rclpy
+from rclpy.node import Node
+from std_msgs.msg import String
+from pcrp_ros import node
+
+
+class Probe(Node):
+    def __init__(self):
+        super().__init__('stop_probe')
+        self.timer = self.create_timer(0.05, self.tick)
+        self.pub = self.create_publisher(String, 'stop_probe', 10)
+
+    def tick(self):
+        print('spinning', flush=True)
+        self.destroy_timer(self.timer)
+
+    def destroy_node(self):
+        print(f'context up when destroyed: {rclpy.ok()}', flush=True)
+        return super().destroy_node()
+
+
+sys.exit(node.run(Probe, 'probe'))
+"""
+
+
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_or_sigterm_destroys_the_node_before_the_context_and_exits_0(signum):
+    import os
+    import subprocess
+    import sys
+    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 70) % 200 + 1)}
+    proc = subprocess.Popen([sys.executable, '-c', ORDERLY_STOP], stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, env=env)
+    try:
+        assert proc.stdout.readline().strip() == 'spinning'
+        proc.send_signal(signum)
+        out, _ = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0 and 'Traceback' not in out, out
+    assert 'context up when destroyed: True' in out, out
 
 
 def _header(sec):
