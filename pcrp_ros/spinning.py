@@ -56,7 +56,7 @@ def spin_until_interrupted(executor, step: float = 0.2) -> None:
     seconds: a wake alone does not end its wait, and rclpy's spin_until_future_complete adds a
     callback to the future at every turn, which a node spinning for days would pile up.
     """
-    stop = threading.Event()
+    stop, done = threading.Event(), threading.Event()
     failed = []
 
     def spin():
@@ -65,15 +65,18 @@ def spin_until_interrupted(executor, step: float = 0.2) -> None:
                 executor.spin_once(timeout_sec=step)
         except BaseException as e:   # told to the main thread, which decides
             failed.append(e)
+        finally:
+            done.set()
 
-    thread = threading.Thread(target=spin, name='executor', daemon=True)
-    thread.start()
+    # Started inside the try: a Ctrl-C can land while start() waits for the thread, and a thread
+    # still in rcl's wait when the interpreter exits aborts it (std::terminate at pthread_exit).
     try:
-        while thread.is_alive():
-            thread.join(0.5)
+        threading.Thread(target=spin, name='executor', daemon=True).start()
+        while not done.wait(0.5):
+            pass
     finally:
         stop.set()
-        thread.join(5.0)
+        done.wait(5.0)
     if failed:
         raise failed[0]
 
