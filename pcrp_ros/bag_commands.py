@@ -413,12 +413,14 @@ def _process(args) -> int:
 
 
 # -- replay and demo ------------------------------------------------------------------------------
-def replay(node, bag, rate_factor=1.0, restamp=True, topics=None, on_publish=None):
+def replay(node, bag, rate_factor=1.0, restamp=True, topics=None, on_publish=None,
+           on_start=None):
     """
     Publish a bag's clouds from `node` at the recorded rate (times rate_factor).
 
     With restamp, each header gets the current time (so ages and latencies are live);
-    on_publish(cloud, msg) is told each cloud sent. Returns the number of clouds published.
+    on_start(n) is told how many clouds are about to go out, on_publish(cloud, msg) each cloud
+    sent. Returns the number of clouds published.
     """
     from rclpy.qos import QoSProfile
     from sensor_msgs.msg import PointCloud2, PointField
@@ -438,6 +440,8 @@ def replay(node, bag, rate_factor=1.0, restamp=True, topics=None, on_publish=Non
         p.get_subscription_count() for p in pubs.values()
     ):
         time.sleep(0.05)
+    if on_start:
+        on_start(len(clouds))
     t0_bag, t0 = (clouds[0]['timestamp'] if clouds else 0), time.monotonic()
     for c in clouds:
         delay = (c['timestamp'] - t0_bag) * 1e-9 / rate_factor - (time.monotonic() - t0)
@@ -488,14 +492,22 @@ def register_replay(sub) -> None:
 
 def _replay(args) -> int:
     import rclpy
+    from rclpy.signals import SignalHandlerOptions
+    from pcrp_ros.spinning import stop_on_signals
 
-    rclpy.init()
+    # Ctrl-C stops the replay between two clouds. rclpy's own handlers would shut the context
+    # down under the next publish instead (a traceback), with the node still in it.
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    stop_on_signals()
     node = rclpy.create_node('pcrp_replay')
     n = 0
     try:
-        n = replay(node, args.bag, args.rate_factor, not args.keep_stamps, args.topics)
+        n = replay(node, args.bag, args.rate_factor, not args.keep_stamps, args.topics,
+                   on_start=lambda k: print(f'replaying {k} clouds from {args.bag} '
+                                            '(Ctrl-C stops)', flush=True))
         print(f'published {n} clouds from {args.bag}')
     except KeyboardInterrupt:
+        print('replay stopped')
         return 0
     finally:
         node.destroy_node()

@@ -27,6 +27,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     import rclpy
     from geometry_msgs.msg import PoseStamped
     from rclpy.parameter import Parameter
+    from rclpy.signals import SignalHandlerOptions
     from scipy.spatial.transform import Rotation
     from std_msgs.msg import String
 
@@ -34,7 +35,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     from pcrp_ros.bag_commands import answer_quality, format_row, HEADER, replay, summary
     from pcrp_ros.bags import read_bag
     from pcrp_ros.node import PcrpNode
-    from pcrp_ros.spinning import node_executor
+    from pcrp_ros.spinning import node_executor, stop_on_signals
 
     bag = bag or str(DEMO_BAG)
     _, truths, _ = read_bag(bag)
@@ -89,7 +90,10 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
             ids.append(msg.data)
             pair()
 
-    rclpy.init()
+    # Ctrl-C ends the replay early and still shows what was answered; the nodes are destroyed
+    # before the context is shut down (node.run says why not rclpy's own handlers)
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    stop_on_signals()
     node = PcrpNode(
         model=PCRP.load(model_path),
         parameter_overrides=[Parameter('sensor_at_origin', value=True)],
@@ -120,6 +124,8 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
         ):
             time.sleep(0.1)
         time.sleep(0.5)
+    except KeyboardInterrupt:
+        print('\ndemo stopped by Ctrl-C', flush=True)
     finally:
         snap = node.stats['segmented_object'].snapshot()
         ex.shutdown(timeout_sec=2.0)

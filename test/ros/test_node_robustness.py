@@ -20,6 +20,7 @@ instances that come and go, and a short soak. The same catalogues write
 docs/results/ROBUSTNESS.md.
 """
 import signal
+import time
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
@@ -184,6 +185,29 @@ def test_ctrl_c_or_sigterm_destroys_the_node_before_the_context_and_exits_0(sign
             proc.kill()
     assert proc.returncode == 0 and 'Traceback' not in out, out
     assert 'context up when destroyed: True' in out, out
+
+
+def test_ctrl_c_stops_a_bag_replay_between_clouds_and_exits_0():
+    import os
+    import subprocess
+    import sys
+    from pcrp_ros.demo import DEMO_BAG
+    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 80) % 200 + 1)}
+    proc = subprocess.Popen(
+        [sys.executable, '-m', 'pcrp_ros.cli', 'replay', str(DEMO_BAG), '--rate-factor', '0.02'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+    try:
+        lines = [proc.stdout.readline()]
+        while lines[-1] and not lines[-1].startswith('replaying'):
+            lines.append(proc.stdout.readline())
+        assert lines[-1].startswith('replaying'), lines
+        time.sleep(0.5)   # between two clouds: at 0.02 times the recorded rate, seconds apart
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0 and 'Traceback' not in out and 'replay stopped' in out, out
 
 
 def _header(sec):
