@@ -492,13 +492,11 @@ def register_replay(sub) -> None:
 
 def _replay(args) -> int:
     import rclpy
-    from rclpy.signals import SignalHandlerOptions
-    from pcrp_ros.spinning import stop_on_signals
+    from pcrp_ros.spinning import init_stopping_on_signals
 
     # Ctrl-C stops the replay between two clouds. rclpy's own handlers would shut the context
     # down under the next publish instead (a traceback), with the node still in it.
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    stop_on_signals()
+    init_stopping_on_signals()
     node = rclpy.create_node('pcrp_replay')
     n = 0
     try:

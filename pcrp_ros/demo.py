@@ -27,7 +27,6 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     import rclpy
     from geometry_msgs.msg import PoseStamped
     from rclpy.parameter import Parameter
-    from rclpy.signals import SignalHandlerOptions
     from scipy.spatial.transform import Rotation
     from std_msgs.msg import String
 
@@ -35,7 +34,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     from pcrp_ros.bag_commands import answer_quality, format_row, HEADER, replay, summary
     from pcrp_ros.bags import read_bag
     from pcrp_ros.node import PcrpNode
-    from pcrp_ros.spinning import node_executor, stop_on_signals
+    from pcrp_ros.spinning import init_stopping_on_signals, node_executor
 
     bag = bag or str(DEMO_BAG)
     _, truths, _ = read_bag(bag)
@@ -91,9 +90,8 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
             pair()
 
     # Ctrl-C ends the replay early and still shows what was answered; the nodes are destroyed
-    # before the context is shut down (node.run says why not rclpy's own handlers)
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    stop_on_signals()
+    # before the context is shut down
+    init_stopping_on_signals()
     node = PcrpNode(
         model=PCRP.load(model_path),
         parameter_overrides=[Parameter('sensor_at_origin', value=True)],

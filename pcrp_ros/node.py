@@ -29,13 +29,12 @@ import sys
 
 from pcrp_core import ModelError
 from pcrp_ros.answering import CloudAnswerer
-from pcrp_ros.spinning import node_executor, spin_until_interrupted, stop_on_signals
+from pcrp_ros.spinning import init_stopping_on_signals, node_executor, spin_until_interrupted
 from pcrp_ros.workers import WorkerStartError
 import rclpy
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.signals import SignalHandlerOptions
 
 # what stops a node at start-up with one line: a broken model, a mistyped parameter or topic
 START_ERRORS = (ModelError, ValueError, ParameterException, NameValidationException,
@@ -83,13 +82,8 @@ def run(make_node, program: str, args=None) -> int:
     faulthandler.enable(all_threads=True)
     if hasattr(signal, 'SIGUSR1'):
         faulthandler.register(signal.SIGUSR1, all_threads=True)
-    # Not rclpy's signal handlers: they shut the context down at Ctrl-C, with the node's
-    # publishers and subscriptions still in it, and Fast DDS then deletes them against a context
-    # that is gone. On a loaded machine that crashed the node now and then (SIGSEGV in a DDS
-    # thread while the node destroyed a publisher). Here Ctrl-C and SIGTERM stop the executor
-    # only; the node is destroyed before the context is shut down, as ROS 2 expects.
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    stop_on_signals()
+    # Ctrl-C and SIGTERM stop the executor only; the node is destroyed before the context
+    init_stopping_on_signals(args)
     # The executor exists before the node says it is listening: a Ctrl-C that lands while an
     # executor is being built leaves a half-made object whose __del__ prints a traceback. Several
     # threads: ~/reload_model waits for the new model while clouds keep arriving.

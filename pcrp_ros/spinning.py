@@ -28,6 +28,7 @@ import time
 
 import rclpy
 from rclpy.executors import MultiThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 
 
 # Threads for the callbacks of the nodes an executor spins. Jazzy's rclpy (7.1) hands a callback
@@ -51,10 +52,11 @@ def spin_until_interrupted(executor, step: float = 0.2) -> None:
     """
     Spin the executor on a thread until Ctrl-C or SIGTERM, then stop it; re-raise what it raised.
 
-    The main thread waits, so a signal reaches it at once as KeyboardInterrupt (stop_on_signals)
-    and never inside the executor's own code. The executor looks for the stop every step
-    seconds: a wake alone does not end its wait, and rclpy's spin_until_future_complete adds a
-    callback to the future at every turn, which a node spinning for days would pile up.
+    The main thread waits, so a signal reaches it at once as KeyboardInterrupt (see
+    init_stopping_on_signals) and never inside the executor's own code. The executor looks for
+    the stop every step seconds: a wake alone does not end its wait, and rclpy's
+    spin_until_future_complete adds a callback to the future at every turn, which a node
+    spinning for days would pile up.
     """
     stop, done = threading.Event(), threading.Event()
     failed = []
@@ -81,11 +83,20 @@ def spin_until_interrupted(executor, step: float = 0.2) -> None:
         raise failed[0]
 
 
-def stop_on_signals() -> None:
-    """Make SIGTERM end the program as Ctrl-C does (KeyboardInterrupt), in the main thread."""
+def init_stopping_on_signals(args=None) -> None:
+    """
+    Initialise rclpy for a program whose Ctrl-C and SIGTERM raise KeyboardInterrupt.
+
+    Not rclpy's signal handlers: they shut the context down at Ctrl-C, with the program's
+    publishers and subscriptions still in it, and Fast DDS then deletes them against a context
+    that is gone. On a loaded machine that crashed the node now and then (SIGSEGV in a DDS thread
+    while it destroyed a publisher). Here a signal reaches the main thread only, which stops its
+    work, destroys its nodes and shuts the context down last, as ROS 2 expects.
+    """
     def interrupt(signum, frame):
         raise KeyboardInterrupt(signal.Signals(signum).name)
 
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     signal.signal(signal.SIGTERM, interrupt)
     signal.signal(signal.SIGINT, interrupt)
 
