@@ -22,6 +22,12 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 from pcrp_ros.spinning import ros_context, spinning, wait_for  # noqa: E402,F401
 
 
+def own_domain_env(offset: int) -> dict:
+    """Return this process's environment with a ROS domain offset from the tests' own."""
+    domain = (int(os.environ['ROS_DOMAIN_ID']) + offset) % 200 + 1
+    return {**os.environ, 'ROS_DOMAIN_ID': str(domain)}
+
+
 def publish_until(pub, msg, predicate, timeout=60.0, every=3.0):
     """
     Publish msg, again every `every` seconds, until predicate holds.

@@ -14,19 +14,18 @@
 
 """`make demo` as a user runs it: every cloud of the shipped bag gets a row with its confidence."""
 
-import os
 import re
 import subprocess
 import sys
 
-import rosutil  # noqa: F401  (a ROS domain of this test process's own)
+from rosutil import own_domain_env  # and a ROS domain of this test process's own
 
 ROW = re.compile(r'^segmented_object\s+\d+\.\d{9}\s+(\S+)\s+(\S+)\s+([\d.]+)\s+([\d.]+)%\s+'
                  r'(\S+)\s+(\d+)\s+(ok|rejected: \w+)$')
 
 
 def test_the_demo_shows_every_cloud_with_its_confidence_and_accounts_for_the_bag():
-    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 70) % 200 + 1)}
+    env = own_domain_env(70)
     proc = subprocess.run([sys.executable, '-m', 'pcrp_ros.cli', 'demo'], capture_output=True,
                           text=True, timeout=300, env=env)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]

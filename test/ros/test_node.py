@@ -29,7 +29,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 # sets ROS_DOMAIN_ID and the discovery range before any context is made
-from rosutil import ros_context, spinning, wait_for
+from rosutil import own_domain_env, ros_context, spinning, wait_for
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header, String
 
@@ -247,7 +247,6 @@ def test_a_bag_replayed_to_the_node_is_answered_with_its_stamps(model, tmp_path)
 
 
 def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path):
-    import os
     import signal
     import subprocess
     import sys
@@ -261,7 +260,7 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path
     # renamed, as a second or scaled-out instance would be: the file must still apply
     # a domain of its own: nothing else in this test process talks to it, so only the node's own
     # start and stop are under test
-    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 50) % 200 + 1)}
+    env = own_domain_env(50)
     proc = subprocess.Popen(
         [
             sys.executable,
@@ -310,10 +309,9 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path
 
 @pytest.mark.parametrize('override', ['min_points:=3.5', 'up_vector:=[0, -1, 0]', 'min_points:=2'])
 def test_a_mistyped_or_out_of_range_parameter_stops_the_node_with_one_clear_line(override):
-    import os
     import subprocess
     import sys
-    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 60) % 200 + 1)}
+    env = own_domain_env(60)
     out = subprocess.run([sys.executable, '-m', 'pcrp_ros.node', '--ros-args', '-p', override],
                          capture_output=True, text=True, timeout=120, env=env)
     assert (

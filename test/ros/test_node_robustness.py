@@ -34,7 +34,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 # sets ROS_DOMAIN_ID and the discovery range before any context is made
-from rosutil import publish_until, ros_context, spinning, wait_for
+from rosutil import own_domain_env, publish_until, ros_context, spinning, wait_for
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header
 from tools.bad_clouds import accepted, CaseRunner, CASES, good_cloud
@@ -170,10 +170,9 @@ sys.exit(node.run(Probe, 'probe'))
 
 @pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
 def test_ctrl_c_or_sigterm_destroys_the_node_before_the_context_and_exits_0(signum):
-    import os
     import subprocess
     import sys
-    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 70) % 200 + 1)}
+    env = own_domain_env(70)
     proc = subprocess.Popen([sys.executable, '-c', ORDERLY_STOP], stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True, env=env)
     try:
@@ -191,11 +190,10 @@ def test_ctrl_c_or_sigterm_destroys_the_node_before_the_context_and_exits_0(sign
 
 
 def test_ctrl_c_stops_a_bag_replay_between_clouds_and_exits_0():
-    import os
     import subprocess
     import sys
     from pcrp_ros.demo import DEMO_BAG
-    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 80) % 200 + 1)}
+    env = own_domain_env(80)
     proc = subprocess.Popen(
         [sys.executable, '-m', 'pcrp_ros.cli', 'replay', str(DEMO_BAG), '--rate-factor', '0.02'],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)

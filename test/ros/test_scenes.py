@@ -33,7 +33,7 @@ import rclpy
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 # sets ROS_DOMAIN_ID and the discovery range before any context is made
-from rosutil import ros_context, spinning, wait_for
+from rosutil import own_domain_env, ros_context, spinning, wait_for
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2
 from std_msgs.msg import Header
 from tools import bad_scenes
@@ -274,13 +274,12 @@ def test_scene_topics_are_one_shared_or_one_per_input_topic(inputs, scenes, expe
 
 
 def test_scene_topics_of_another_length_stop_the_node_with_one_clear_line():
-    import os
     import subprocess
     import sys
     with pytest.raises(ValueError, match=r'scene_topics: expected one topic shared by every '
                                          r'input topic or one per input topic \(3'):
         NodeSettings(input_topics=['a', 'b', 'c'], scene_topics=['d1', 'd2'])
-    env = {**os.environ, 'ROS_DOMAIN_ID': str((int(os.environ['ROS_DOMAIN_ID']) + 70) % 200 + 1)}
+    env = own_domain_env(70)
     out = subprocess.run(
         [sys.executable, '-m', 'pcrp_ros.node', '--ros-args', '-p', 'scene_topics:=[d1, d2]'],
         capture_output=True, text=True, timeout=120, env=env)
