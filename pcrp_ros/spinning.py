@@ -58,22 +58,11 @@ def spin_until_interrupted(executor, step: float = 0.2) -> None:
     spin_until_future_complete adds a callback to the future at every turn, which a node
     spinning for days would pile up.
     """
-    stop, done = threading.Event(), threading.Event()
-    failed = []
-
-    def spin():
-        try:
-            while not stop.is_set() and executor.context.ok():
-                executor.spin_once(timeout_sec=step)
-        except BaseException as e:   # told to the main thread, which decides
-            failed.append(e)
-        finally:
-            done.set()
-
+    stop, done, failed = threading.Event(), threading.Event(), []
     # Started inside the try: a Ctrl-C can land while start() waits for the thread, and a thread
     # still in rcl's wait when the interpreter exits aborts it (std::terminate at pthread_exit).
     try:
-        threading.Thread(target=spin, name='executor', daemon=True).start()
+        _spin_thread(executor, stop, done, failed, step).start()
         while not done.wait(0.5):
             pass
     finally:
@@ -81,6 +70,25 @@ def spin_until_interrupted(executor, step: float = 0.2) -> None:
         done.wait(5.0)
     if failed:
         raise failed[0]
+
+
+def _spin_thread(executor, stop, done, failed: list, step: float) -> threading.Thread:
+    """
+    Return a thread that spins the executor until stop is set or its context is shut down.
+
+    It sets done when it has left the executor (what it raised is put in failed): only then may
+    the nodes be destroyed and the executor shut down, which destroys what the wait it was in used.
+    """
+    def spin():
+        try:
+            while not stop.is_set() and executor.context.ok():
+                executor.spin_once(timeout_sec=step)
+        except BaseException as e:   # told to whoever waits on done, which decides
+            failed.append(e)
+        finally:
+            done.set()
+
+    return threading.Thread(target=spin, name='executor', daemon=True)
 
 
 def init_stopping_on_signals(args=None) -> None:
@@ -113,18 +121,26 @@ def ros_context():
 
 @contextmanager
 def spinning(ctx, *nodes):
-    """Spin the nodes until the block ends, then destroy them."""
+    """
+    Spin the nodes until the block ends, then destroy them.
+
+    What a callback raised in the executor's own thread is raised here when the block ends.
+    """
     ex = node_executor(ctx)
     for n in nodes:
         ex.add_node(n)
-    thread = threading.Thread(target=ex.spin, daemon=True)
-    thread.start()
+    stop, done, failed = threading.Event(), threading.Event(), []
+    _spin_thread(ex, stop, done, failed, 0.1).start()
     try:
         yield ex
     finally:
+        stop.set()
+        done.wait(5.0)
         ex.shutdown(timeout_sec=2.0)
         for n in nodes:
             n.destroy_node()
+    if failed:
+        raise failed[0]
 
 
 def wait_for(predicate, timeout=30.0, step=0.05):
