@@ -43,3 +43,22 @@ def publish_until(pub, msg, predicate, timeout=60.0, every=3.0):
         if wait_for(predicate, min(every, end - time.monotonic())):
             return True
     return False
+
+
+def lines_until(stream, done, timeout=60.0) -> list[str]:
+    """
+    Read lines from a subprocess's output until one satisfies done (then the last), or it ends.
+
+    Whatever DDS prints at start-up (a stale shared-memory port, say) may come before the line a
+    test waits for. The timeout is looked at between lines only.
+    """
+    import time
+    end, lines = time.monotonic() + timeout, []
+    while time.monotonic() < end:
+        line = stream.readline()
+        if not line:
+            break
+        lines.append(line)
+        if done(line):
+            break
+    return lines

@@ -29,7 +29,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 # sets ROS_DOMAIN_ID and the discovery range before any context is made
-from rosutil import own_domain_env, ros_context, spinning, wait_for
+from rosutil import lines_until, own_domain_env, ros_context, spinning, wait_for
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header, String
 
@@ -279,12 +279,7 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path
     )
     lines = []
     try:
-        end = time.monotonic() + 60
-        while time.monotonic() < end and not any('listening on' in line for line in lines):
-            line = proc.stdout.readline()
-            if not line:
-                break
-            lines.append(line)
+        lines = lines_until(proc.stdout, lambda line: 'listening on' in line)
         assert any('listening on /cam_a/object' in line for line in lines), lines
         # a running node: its diagnostics timer has fired and DDS discovery has settled. (A Ctrl-C
         # in the very first moments of DDS start-up has been seen to crash inside it, about one

@@ -34,7 +34,9 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 # sets ROS_DOMAIN_ID and the discovery range before any context is made
-from rosutil import own_domain_env, publish_until, ros_context, spinning, wait_for
+from rosutil import (
+    lines_until, own_domain_env, publish_until, ros_context, spinning, wait_for,
+)
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header
 from tools.bad_clouds import accepted, CaseRunner, CASES, good_cloud
@@ -176,10 +178,8 @@ def test_ctrl_c_or_sigterm_destroys_the_node_before_the_context_and_exits_0(sign
     proc = subprocess.Popen([sys.executable, '-c', ORDERLY_STOP], stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True, env=env)
     try:
-        lines = [proc.stdout.readline()]   # anything DDS says at start-up comes first
-        while lines[-1] and lines[-1].strip() != 'spinning':
-            lines.append(proc.stdout.readline())
-        assert lines[-1].strip() == 'spinning', lines
+        lines = lines_until(proc.stdout, lambda line: line.strip() == 'spinning')
+        assert lines and lines[-1].strip() == 'spinning', lines
         proc.send_signal(signum)
         out, _ = proc.communicate(timeout=30)
     finally:
@@ -198,10 +198,8 @@ def test_ctrl_c_stops_a_bag_replay_between_clouds_and_exits_0():
         [sys.executable, '-m', 'pcrp_ros.cli', 'replay', str(DEMO_BAG), '--rate-factor', '0.02'],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
     try:
-        lines = [proc.stdout.readline()]
-        while lines[-1] and not lines[-1].startswith('replaying'):
-            lines.append(proc.stdout.readline())
-        assert lines[-1].startswith('replaying'), lines
+        lines = lines_until(proc.stdout, lambda line: line.startswith('replaying'))
+        assert lines and lines[-1].startswith('replaying'), lines
         time.sleep(0.5)   # between two clouds: at 0.02 times the recorded rate, seconds apart
         proc.send_signal(signal.SIGINT)
         out, _ = proc.communicate(timeout=30)
