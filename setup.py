@@ -64,9 +64,9 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-            'pcrp = pcrp_ros.cli:main',
-            'pcrp_node = pcrp_ros.node:main',
-            'pcrp_lifecycle_node = pcrp_ros.lifecycle_node:main',
+            'pcrp = pcrp_ros.entry_points:pcrp',
+            'pcrp_node = pcrp_ros.entry_points:pcrp_node',
+            'pcrp_lifecycle_node = pcrp_ros.entry_points:pcrp_lifecycle_node',
         ],
     },
 )

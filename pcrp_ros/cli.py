@@ -21,7 +21,12 @@ from pcrp_ros import bag_commands, demo
 
 def main(argv=None):
     parser = core_cli.build_parser(extensions=[bag_commands.register, demo.register])
-    return core_cli.run(parser, argv)
+    try:
+        return core_cli.run(parser, argv)
+    except KeyboardInterrupt:
+        # Ctrl-C: what was under way is abandoned, which the user knows; a traceback says nothing
+        print('pcrp: interrupted', file=sys.stderr)
+        return 130
 
 
 if __name__ == '__main__':

@@ -93,3 +93,27 @@ def test_a_leading_minus_is_a_value_not_an_option():
     # "--up-axis: expected one argument")
     proc = pcrp('build', '--up-axis', '-y', '--help')
     assert proc.returncode == 0 and '--up-axis' in proc.stdout, proc.stderr
+
+
+def test_ctrl_c_ends_a_command_with_one_line_and_130(tmp_path):
+    """As a terminal sends it: SIGINT to the whole process group, build's workers included."""
+    import os
+    import signal
+    model = tmp_path / 'model'
+    proc = subprocess.Popen(
+        [sys.executable, '-c', 'import sys; from pcrp_ros.entry_points import pcrp; '
+         'sys.exit(pcrp())', 'build', 'procedural:12', '--out', str(model)],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True,
+        env={**os.environ, 'PYTHONUNBUFFERED': '1'})
+    try:
+        lines = []
+        while not lines or (lines[-1] and 'fitting' not in lines[-1]):
+            lines.append(proc.stdout.readline())
+        assert 'fitting' in lines[-1], lines
+        os.killpg(proc.pid, signal.SIGINT)
+        out, _ = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130 and 'pcrp: interrupted' in out and 'Traceback' not in out, out
+    assert not model.exists()

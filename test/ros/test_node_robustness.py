@@ -189,6 +189,25 @@ def test_ctrl_c_or_sigterm_destroys_the_node_before_the_context_and_exits_0(sign
     assert 'context up when destroyed: True' in out, out
 
 
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+def test_a_node_stopped_while_it_starts_exits_0_without_a_traceback(signum):
+    """As a launch file stopped at once: the signal lands while the node imports Open3D & co."""
+    import subprocess
+    import sys
+    proc = subprocess.Popen(
+        [sys.executable, '-c', 'import sys; from pcrp_ros.entry_points import pcrp_node; '
+         'sys.exit(pcrp_node())'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=own_domain_env(90))
+    try:
+        time.sleep(0.3)
+        proc.send_signal(signum)
+        out, _ = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0 and 'Traceback' not in out and 'Error' not in out, out
+
+
 def test_ctrl_c_stops_a_bag_replay_between_clouds_and_exits_0():
     import subprocess
     import sys
