@@ -39,6 +39,11 @@ class PcrpLifecycleNode(LifecycleNode):
     def __init__(self, model=None, node_name: str = 'pcrp_node', on_answer=None, **kwargs):
         """Declare the parameters; model and on_answer as the plain node's (node.py)."""
         super().__init__(node_name, **kwargs)
+        # rclpy 7.1 checks a transition asked for by label but not one asked for by id: an id
+        # with no transition from the current state (activate while unconfigured) raised
+        # RCLError in the service's callback, which ended the executor and the node with it
+        change_state = self._service_change_state
+        change_state.callback = self._refusing_unavailable_ids(change_state.callback)
         self._given_model = model
         self.answerer = CloudAnswerer(self)
         self.answerer.on_answer = on_answer
@@ -51,6 +56,20 @@ class PcrpLifecycleNode(LifecycleNode):
     @property
     def stats(self):
         return self.answerer.stats
+
+    def _refusing_unavailable_ids(self, change_state):
+        """Wrap the change_state service's callback: an unavailable id fails, as a label does."""
+        def checked(request, response):
+            wanted = request.transition
+            if not wanted.label and wanted.id not in {
+                    t[0] for t in self._state_machine.available_transitions}:
+                state = self._state_machine.current_state[1]
+                self.get_logger().warning(f'transition {wanted.id} refused: none from state '
+                                          f'{state} has that id')
+                response.success = False
+                return response
+            return change_state(request, response)
+        return checked
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         try:

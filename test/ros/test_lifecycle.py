@@ -78,6 +78,10 @@ def test_transitions_load_answer_stop_and_free_the_model(tmp_path):
             # a configure that cannot load the model fails and leaves the node unconfigured
             assert not drive.transition(Transition.TRANSITION_CONFIGURE)
             assert drive.state() == State.PRIMARY_STATE_UNCONFIGURED and node.model is None
+            # a transition the state has none of, asked for by id as a lifecycle manager may:
+            # refused, and the node stays up (rclpy alone raised in the service and stopped it)
+            assert not drive.transition(Transition.TRANSITION_ACTIVATE)
+            assert drive.state() == State.PRIMARY_STATE_UNCONFIGURED
             node.set_parameters([Parameter('model_path', value='')])
             assert drive.transition(Transition.TRANSITION_CONFIGURE)
             assert drive.state() == State.PRIMARY_STATE_INACTIVE
