@@ -399,11 +399,25 @@ class CloudAnswerer:
         item = Waiting(msg.header, points, received, self._scenes.on_arrival(topic, msg.header))
         with self._cv:
             waiting = self._slots.setdefault(topic, collections.deque())
+            dropped = 0
             while len(waiting) >= self.settings.queue_size:
                 waiting.popleft()
                 stats.count('dropped_stale')
+                dropped += 1
             waiting.append(item)
             self._cv.notify()
+        if dropped:
+            self._warn_if_behind(topic, stats)
+
+    def _warn_if_behind(self, topic: str, stats) -> None:
+        """Log, once per log_throttle_sec, that a topic's clouds are dropped unanswered."""
+        behind = stats.falling_behind()
+        if behind and self._due((topic, 'falling_behind')):
+            p50 = stats.snapshot().get('latency_p50_ms')
+            took = f'; answers take {p50:.0f} ms at the median' if p50 is not None else ''
+            self._log().warning(f'{topic}: {behind}{took}: give the node more `workers` (one '
+                                'per core), send fewer clouds, or lighten its search '
+                                '(docs/node.md, Workers)')
 
     def _next(self, k: int, engine):
         """

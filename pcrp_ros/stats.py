@@ -23,6 +23,9 @@ import numpy as np
 
 # consecutive rejections (without an answer between them) that turn a topic's status to WARN
 WARN_STREAK = 10
+# clouds dropped unanswered (a newer one came first) among the last RECENT decided that turn it to
+# WARN: one in four. A node that keeps up drops one now and then, when a burst meets a slow answer
+RECENT, DROP_WARN = 20, 5
 
 
 class StreamStats:
@@ -39,6 +42,7 @@ class StreamStats:
         self.confidence = deque(maxlen=window)  # of the answers published
         self.stages = {}                    # stage -> seconds of the last `window` estimates
         self.streak = 0                     # rejections since the last answer
+        self.recent = deque(maxlen=RECENT)  # how the last clouds were decided
 
     def count(self, key: str, reason: str | None = None) -> None:
         with self._lock:
@@ -49,6 +53,20 @@ class StreamStats:
                 self.streak += 1
             elif key == 'answered':
                 self.streak = 0
+            if key in ('answered', 'rejected', 'dropped_stale'):
+                self.recent.append(key)
+
+    def falling_behind(self) -> str:
+        """Say how many of the last clouds were dropped unanswered, if that is a warning ('')."""
+        with self._lock:
+            return self._falling_behind()
+
+    def _falling_behind(self) -> str:
+        dropped = self.recent.count('dropped_stale')
+        if dropped < DROP_WARN:
+            return ''
+        return (f'falling behind, {dropped} of the last {len(self.recent)} clouds dropped '
+                'unanswered (a newer one came first)')
 
     def scene(self, outcome: str) -> None:
         """Count what one estimate had of its scene; reported as scene_<outcome>."""
@@ -88,9 +106,10 @@ class StreamStats:
         """
         Say whether the stream is healthy, and how it goes in one line.
 
-        Unhealthy when clouds were decided and none answered, or when the last WARN_STREAK
-        decided clouds were all rejected. A cloud still being answered, the first one
-        included, is no reason for a warning.
+        Unhealthy when clouds were decided and none answered, when the last WARN_STREAK
+        decided clouds were all rejected, or when DROP_WARN of the last RECENT were dropped
+        unanswered. A cloud still being answered, the first one included, is no reason for a
+        warning.
         """
         with self._lock:
             c = self.counts
@@ -100,6 +119,9 @@ class StreamStats:
                               f'({_top(self.rejections)})'
             if self.streak >= WARN_STREAK:
                 return False, f'{text}: the last {self.streak} rejected ({_top(self.rejections)})'
+            behind = self._falling_behind()
+            if behind:
+                return False, f'{text}: {behind}'
             if c['received'] and not c['answered'] and not c['rejected']:
                 return True, f'{text}: answering the first cloud'
             return True, text

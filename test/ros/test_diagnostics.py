@@ -26,7 +26,7 @@ from pcrp_core.result import PoseResult
 from pcrp_ros.answering import Waiting
 from pcrp_ros.conversions import detections_msg, xyz_to_pointcloud2
 from pcrp_ros.node import PcrpNode
-from pcrp_ros.stats import StreamStats, WARN_STREAK
+from pcrp_ros.stats import DROP_WARN, RECENT, StreamStats, WARN_STREAK
 import pytest
 import rclpy
 from rclpy.parameter import Parameter
@@ -77,6 +77,19 @@ def test_levels_follow_what_was_decided():
     assert not ok and f'last {WARN_STREAK} rejected' in text
     s.count('answered')
     assert s.status()[0]
+    # a node that falls behind: newer clouds push the waiting ones out unanswered
+    for _ in range(DROP_WARN - 1):
+        s.count('dropped_stale')
+        s.count('answered')
+    assert s.status()[0], 'a few clouds dropped in bursts are no warning'
+    s.count('dropped_stale')
+    ok, text = s.status()
+    assert not ok and f'falling behind, {DROP_WARN} of the last' in text
+    s.count('answered')
+    assert not s.status()[0], 'an answer between drops is not keeping up'
+    for _ in range(RECENT):
+        s.count('answered')
+    assert s.status()[0], 'once it keeps up again'
 
 
 def test_a_topic_is_ok_while_its_first_cloud_is_answered_then_reports_what_it_saw(
