@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 import sys
 import time
 
@@ -172,6 +173,10 @@ def register_make_bag(sub) -> None:
 
 
 def _make_bag(a) -> int:
+    if Path(a.out).exists():
+        print(f'pcrp: error: {a.out} exists already; give another --out, or remove it first',
+              file=sys.stderr)
+        return 2
     try:
         n = make_bag(
             a.out,
@@ -257,6 +262,8 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
     for p in problems:
         print(f'pcrp: {bag}: {p}', file=sys.stderr)
     rows = []
+    if not clouds:   # no bag of outputs for nothing: it would only be in the way of the next run
+        return rows
     with BagWriter(out) as writer:
         for k, c in enumerate(clouds):
             hdr = c['msg'].header
@@ -388,6 +395,14 @@ def _process(args) -> int:
 
     from pcrp_core.cli import parse_up
 
+    # checked before the model loads, and before anything is written
+    if not Path(args.bag).exists():
+        print(f'pcrp: error: {args.bag}: no such bag', file=sys.stderr)
+        return 2
+    if Path(args.out).exists():
+        print(f'pcrp: error: {args.out} exists already; give another --out, or remove it first',
+              file=sys.stderr)
+        return 2
     try:
         model = PCRP.load(args.model)
         up = parse_up(args.up)

@@ -96,6 +96,24 @@ def _process_command(bag, out, *options):
         capture_output=True, text=True, timeout=120)
 
 
+def test_process_and_make_bag_refuse_a_missing_bag_or_an_existing_out_in_one_line(tmp_path):
+    bag = tmp_path / 'in'
+    make_bag(bag, 'procedural:20', count=2, rate=10, seed=3)
+    made = subprocess.run([sys.executable, '-m', 'pcrp_ros.cli', 'make-bag', '--out', str(bag),
+                           '--source', 'procedural:2'], capture_output=True, text=True,
+                          timeout=120)
+    assert made.returncode == 2 and 'exists already' in made.stderr, made.stderr
+    out = tmp_path / 'out'
+    out.mkdir()
+    again = _process_command(bag, out, '--model', str(PROCEDURAL_MODEL))
+    assert again.returncode == 2 and 'exists already' in again.stderr, again.stderr
+    missing = _process_command(tmp_path / 'no_bag', tmp_path / 'out2')
+    assert missing.returncode == 2 and 'no such bag' in missing.stderr, missing.stderr
+    assert not (tmp_path / 'out2').exists()
+    for run in (made, again, missing):
+        assert 'Traceback' not in run.stderr and len(run.stderr.strip().splitlines()) == 1
+
+
 def test_clouds_on_unexpected_topics_are_reported_and_the_rest_answered(tmp_path, capsys):
     from tools.robustness import mixed_bag
     bag = tmp_path / 'mixed'
