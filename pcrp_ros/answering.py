@@ -60,6 +60,7 @@ from pcrp_ros.conversions import pointcloud2_to_xyz, pose_stamped, xyz_to_pointc
 from pcrp_ros.depth_images import camera_info_topic
 from pcrp_ros.engine import Engine, load_engine, LOAD_ERRORS, ReloadRequest
 from pcrp_ros.parameters import descriptor, MODEL_SETTINGS, NodeSettings, parameters, ros_value
+from pcrp_ros.parameters import unknown_overrides
 from pcrp_ros.scenes import Scenes
 from pcrp_ros.stats import StreamStats
 from pcrp_ros.workers import ProcessEstimator, WorkerDied
@@ -111,6 +112,10 @@ class CloudAnswerer:
         self._params = {k: values[k] for k in MODEL_SETTINGS}
         _check_model_settings(self._params)
         self._up = _checked_up(values['up_vector'], None)
+        unknown = unknown_overrides(node)
+        if unknown:
+            self._log().warning('parameters this node does not have, ignored: '
+                                f"{', '.join(unknown)}")
         self.engine = None
         self.stats: dict[str, StreamStats] = {}
         self._resolved = {}

@@ -25,6 +25,7 @@ config/pcrp.yaml, which a test holds against these declarations.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import difflib
 import math
 
 from pcrp_core.config import Options, setting, user_settings
@@ -106,6 +107,23 @@ def parameters() -> list[dict]:
     The node's own, then the model's (which a parameter update passes to the model).
     """
     return NodeSettings.describe() + user_settings()
+
+
+def unknown_overrides(node) -> list[str]:
+    """
+    Name the parameters the node was given and does not have, each with the nearest it has.
+
+    rclpy keeps what the command line and params files give a node (its _parameter_overrides)
+    and ignores, without a word, every name the node never declares: a misspelt min_confidence
+    left the default in force.
+    """
+    given = getattr(node, '_parameter_overrides', {})
+    known = [spec['name'] for spec in parameters()]
+    said = []
+    for name in sorted(n for n in given if not node.has_parameter(n)):
+        near = difflib.get_close_matches(name, known, n=1)
+        said.append(f'{name} (did you mean {near[0]}?)' if near else name)
+    return said
 
 
 def ros_value(value):

@@ -304,6 +304,22 @@ def test_the_shipped_config_starts_the_node_and_ctrl_c_stops_it_cleanly(tmp_path
     assert 'Traceback' not in rest
 
 
+def test_a_parameter_the_node_does_not_have_is_named_with_the_nearest_it_has():
+    import subprocess
+    import sys
+    proc = subprocess.Popen([sys.executable, '-m', 'pcrp_ros.node', '--ros-args', '-p',
+                             'min_confidance:=0.3', '-p', 'frobnicate:=1'],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=own_domain_env(60))
+    try:
+        lines = lines_until(proc.stdout, lambda line: 'listening on' in line)
+    finally:
+        proc.kill()
+        proc.wait()
+    said = [line for line in lines if 'does not have' in line]
+    assert said and 'frobnicate, min_confidance (did you mean min_confidence?)' in said[0], lines
+
+
 @pytest.mark.parametrize('override', ['min_points:=3.5', 'up_vector:=[0, -1, 0]', 'min_points:=2'])
 def test_a_mistyped_or_out_of_range_parameter_stops_the_node_with_one_clear_line(override):
     import subprocess
