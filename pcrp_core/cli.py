@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from pathlib import Path
 import re
 import sys
 import time
@@ -138,25 +139,31 @@ def _build(args) -> int:
         return _fail(str(e))
     if args.scale is not None:
         objects = scaled(objects, args.scale)
-    elif problem := unit_problem(objects):
+    if problem := unit_problem(objects, args.scale):
         return _fail(f"{' '.join(args.sources)}: {problem}")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        return _fail(f'--out {out}: a file is there; a model is a directory')
     print(
         f'{len(objects)} objects in {len({o.category for o in objects})} categories; fitting...',
         file=sys.stderr,
     )
-    model = PCRP.build(
-        objects,
-        hop1=args.hop1,
-        n_clusters=args.clusters,
-        aggregation=args.aggregation,
-        n_points=args.n_points,
-        views=args.views,
-        seed=args.seed,
-        sources=args.sources,
-        progress=_progress,
-        n_jobs=args.jobs,
-        up_axis=args.up_axis,
-    )
+    try:
+        model = PCRP.build(
+            objects,
+            hop1=args.hop1,
+            n_clusters=args.clusters,
+            aggregation=args.aggregation,
+            n_points=args.n_points,
+            views=args.views,
+            seed=args.seed,
+            sources=args.sources,
+            progress=_progress,
+            n_jobs=args.jobs,
+            up_axis=args.up_axis,
+        )
+    except RuntimeError as e:   # a mesh no view of which shows enough of it (evaluation/scenes.py)
+        return _fail(f"{' '.join(args.sources)}: {e}")
     if args.scale is not None:
         model.meta['mesh_scale'] = args.scale   # what `pcrp eval` multiplies the meshes by
     model.save(args.out)
@@ -249,6 +256,10 @@ def _query(args) -> int:
         result = model.estimate(points, viewpoint=viewpoint, up=up)
     except (InvalidCloud, ValueError) as e:
         return _fail(f'{args.cloud}: {e}')
+    if result.rejected and viewpoint is None and model.templates is not None:
+        # the node's default (sensor_at_origin); here the cloud may as well be a whole object
+        print('pcrp query: hint: a cloud one depth camera saw, in its own frame, is answered '
+              'as one with --viewpoint 0,0,0, as the node answers it', file=sys.stderr)
     if args.json:
         print(json.dumps(result.to_dict(), indent=1))
         return 0
@@ -323,7 +334,7 @@ def _eval(args) -> int:
                                           summarise, unknown_statistics)
     from pcrp_core.evaluation.scenes import sample_scenes
     from pcrp_core.sources import load_source
-    from pcrp_core.sources.units import scaled
+    from pcrp_core.sources.units import scaled, unit_problem
 
     if args.views_per_object < 1:
         return _fail('--views-per-object must be at least 1')
@@ -348,6 +359,9 @@ def _eval(args) -> int:
         objects = scaled(objects, scale)
         print(f'pcrp eval: meshes multiplied by {scale:g}, as the model was built',
               file=sys.stderr)
+    if problem := unit_problem(objects, scale, 'give the meshes in the units the model was '
+                               'built from (the scale a model was built with applies here too)'):
+        return _fail(f'{args.meshes}: {problem}')
     meshes = {o.gallery_id: o.mesh for o in objects if o.mesh is not None}
     skipped = [o.gallery_id for o in objects if o.mesh is None]
     if skipped:

@@ -33,6 +33,9 @@ from pcrp_core.sources.gallery_object import GalleryObject
 # metres across: furniture fits, and a gallery in centimetres or millimetres does not, since
 # nearly every gallery holds something over 5 cm
 MAX_OBJECT_METRES = 5.0
+# and below this nothing a depth camera resolves (a few pixels at half a metre): an object in
+# metres scaled as millimetres, in a folder of mixed units (the smallest YCB object, a die: 3 cm)
+MIN_OBJECT_METRES = 0.005
 
 
 def scaled(objects: list[GalleryObject], factor: float) -> list[GalleryObject]:
@@ -44,22 +47,37 @@ def scaled(objects: list[GalleryObject], factor: float) -> list[GalleryObject]:
     ]
 
 
-def _largest_mesh(objects: list[GalleryObject]) -> tuple[str, float] | None:
-    """(gallery ID, diagonal of its bounding box) of the largest object with a mesh, if any."""
-    sizes = [(float(np.linalg.norm(np.ptp(o.points, axis=0))), o.gallery_id)
-             for o in objects if o.mesh is not None and len(o.points)]
+def _mesh_sizes(objects: list[GalleryObject]) -> list[tuple[float, str]]:
+    """(diagonal of its bounding box, gallery ID) of each object with a mesh, smallest first."""
+    return sorted((float(np.linalg.norm(np.ptp(o.points, axis=0))), o.gallery_id)
+                  for o in objects if o.mesh is not None and len(o.points))
+
+
+# what `pcrp build` can be told
+BUILD_ADVICE = ('for meshes in millimetres give --scale 0.001 (centimetres: 0.01); if they really '
+                'are that large, --scale 1')
+
+
+def unit_problem(objects: list[GalleryObject], scale: float | None = None,
+                 advice: str = BUILD_ADVICE) -> str:
+    """
+    Say why a mesh gallery does not look like metres ('' when it does), ending with advice.
+
+    scale: the factor the objects were multiplied by (--scale), if one was given; then only a
+    gallery of mixed units is a problem.
+    """
+    sizes = _mesh_sizes(objects)
     if not sizes:
-        return None
-    size, gid = max(sizes)
-    return gid, size
-
-
-def unit_problem(objects: list[GalleryObject]) -> str:
-    """Say why a mesh gallery does not look like metres ('' when it does)."""
-    largest = _largest_mesh(objects)
-    if largest is None or largest[1] <= MAX_OBJECT_METRES:
         return ''
-    gid, size = largest
-    return (f'the largest object, {gid}, is {size:.4g} across, and meshes are read as metres: '
-            'for meshes in millimetres give --scale 0.001 (centimetres: 0.01); if they really '
-            'are that large, --scale 1')
+    (smallest, small_id), (largest, large_id) = sizes[0], sizes[-1]
+    mixed = (f'{small_id} is {smallest:.3g} across and {large_id} {largest:.4g}: are the meshes '
+             'in more than one unit? Every mesh is scaled alike')
+    if scale is None and largest > MAX_OBJECT_METRES:
+        if smallest * 0.001 < MIN_OBJECT_METRES:   # no one factor makes both of them metres
+            return mixed
+        return (f'the largest object, {large_id}, is {largest:.4g} across, and meshes are read as '
+                f'metres: {advice}')
+    if smallest < MIN_OBJECT_METRES:
+        after = f' after a scale of {scale:g}' if scale is not None else ''
+        return f'too small for a depth camera to see{after}: {mixed}'
+    return ''

@@ -62,6 +62,9 @@ def test_a_missing_model_or_cloud_fails_with_one_clear_line(tmp_path):
     assert out.returncode == 2 and 'no such model' in out.stderr and 'Traceback' not in out.stderr
     out = pcrp('query', 'default', str(tmp_path / 'x.npy'))
     assert out.returncode == 2 and 'x.npy' in out.stderr and 'Traceback' not in out.stderr
+    (tmp_path / 'taken').write_text('')
+    out = pcrp('build', 'procedural:1', '--out', str(tmp_path / 'taken'))
+    assert out.returncode == 2 and 'a file is there' in out.stderr, out.stderr
 
 
 def test_a_leading_minus_is_a_value_not_an_option():
@@ -117,3 +120,14 @@ def test_ctrl_c_ends_a_command_with_one_line_and_130(tmp_path):
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 130 and 'pcrp: interrupted' in out and 'Traceback' not in out, out
     assert not model.exists()
+
+
+def test_a_rejected_query_to_a_camera_model_says_how_the_node_would_ask(tmp_path):
+    """The node takes clouds to be a camera's view from the origin; a cloud file says nothing."""
+    cloud = tmp_path / 'blob.npy'
+    np.save(cloud, np.random.default_rng(0).normal(scale=0.05, size=(500, 3)) + [0, 0, 0.6])
+    out = pcrp('query', 'default', str(cloud))
+    assert out.returncode == 0 and 'REJECTED' in out.stdout, out.stdout + out.stderr
+    assert 'hint' in out.stderr and '--viewpoint 0,0,0' in out.stderr
+    told = pcrp('query', 'default', str(cloud), '--viewpoint', '0,0,0')
+    assert told.returncode == 0 and 'hint' not in told.stderr, told.stderr

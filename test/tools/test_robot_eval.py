@@ -19,6 +19,7 @@ Meshes are Open3D primitives (in memory, or written to a temporary folder for th
 these run without the YCB data.
 """
 import json
+import shutil
 import subprocess
 import sys
 from types import SimpleNamespace
@@ -338,12 +339,22 @@ def test_pcrp_eval_answers_with_the_node_parameters_it_is_set(built, capsys):
 @pytest.mark.slow
 def test_meshes_in_millimetres_are_refused_until_scaled_and_eval_scales_them_alike(
         built, tmp_path):
-    meshes, _, _ = built
+    meshes, _, metres_model = built
     mm, model, out = tmp_path / 'mm', tmp_path / 'model', tmp_path / 'eval.json'
     mm.mkdir()
     for f in sorted(meshes.glob('*.ply')):
         mesh = o3d.io.read_triangle_mesh(str(f))
         o3d.io.write_triangle_mesh(str(mm / f.name), mesh.scale(1000.0, center=(0, 0, 0)))
+    # millimetres against a model of metres, and a folder of both: said, not answered or built
+    wrong = _run('eval', str(mm), '--model', str(metres_model), '--views-per-object', '1')
+    assert wrong.returncode == 2 and 'units the model was built from' in wrong.stderr
+    mixed = tmp_path / 'mixed'
+    shutil.copytree(meshes, mixed)
+    shutil.copy(next(mm.glob('*.ply')), mixed / 'in_mm.ply')
+    for scale in ([], ['--scale', '0.001']):
+        refused = _run('build', str(mixed), '--up-axis', 'z', '--out', str(model), *scale)
+        assert refused.returncode == 2 and 'more than one unit' in refused.stderr, refused.stderr
+        assert 'Traceback' not in refused.stderr and not model.exists()
     # read as metres, the 15 cm can would be 172 m across: said, with the way out, not built
     refused = _run('build', str(mm), '--up-axis', 'z', '--out', str(model))
     assert refused.returncode == 2 and not model.exists()
