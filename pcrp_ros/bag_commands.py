@@ -52,21 +52,21 @@ def answer_quality(model, gallery_id: str, R, t, truth: dict) -> dict:
 
 
 # -- make-bag -------------------------------------------------------------------------------------
-def _camera_view(mesh, index: int, k: int, seed: int, upright: bool, rng):
+def _camera_view(mesh, index: int, k: int, seed: int, stand, rng):
     """
     Return (points, R, t) of a mesh (metres) as a depth camera measures it.
 
-    Anywhere in front of it turned every way (the evaluation's free scenes), or standing upright
-    before a level camera.
+    Anywhere in front of it turned every way (the evaluation's free scenes), or, given stand (the
+    rotation taking the mesh's up axis to z), standing upright before a level camera.
     """
     from scipy.spatial.transform import Rotation
     from pcrp_core.evaluation.scenes import sample_scene
     from pcrp_core.sources.camera import RangeNoise, view_of
 
-    if not upright:
+    if stand is None:
         scene = sample_scene(mesh, str(index), index, k, 'free', seed=seed)
         return scene.points.astype(np.float64), scene.R, scene.t
-    R = LEVEL_CAMERA @ Rotation.from_euler('z', rng.uniform(0.0, 2 * np.pi)).as_matrix()
+    R = LEVEL_CAMERA @ Rotation.from_euler('z', rng.uniform(0.0, 2 * np.pi)).as_matrix() @ stand
     centre = (mesh.vertices.min(0) + mesh.vertices.max(0)) / 2
     t = np.array([rng.uniform(-0.1, 0.1), rng.uniform(-0.05, 0.05),
                   rng.uniform(0.5, 0.8)]) - R @ centre
@@ -86,26 +86,30 @@ def make_bag(
     frame='camera_optical_frame',
     storage='sqlite3',
     upright: bool = False,
+    up_axis: str | None = None,
 ) -> int:
     """
     Write a bag of object clouds with their ground truth.
 
     upright: objects stand upright, turned about the vertical only, before a level camera
-    (up is UP_IN_LEVEL_CAMERA in its frame); otherwise they are turned every way. Objects with
-    meshes (household, folders of meshes) are seen as a depth camera measures them (ray cast,
-    range noise in metres); others by hidden point removal with noise in object radii.
+    (up is UP_IN_LEVEL_CAMERA in its frame); otherwise they are turned every way. up_axis: the
+    objects' up axis in their own frame ('z', '-y', ...; default: what the source says, which a
+    folder of meshes does not). Objects with meshes (household, folders of meshes) are seen as a
+    depth camera measures them (ray cast, range noise in metres); others by hidden point removal
+    with noise in object radii.
     """
     from scipy.spatial.transform import Rotation
+    from pcrp_core.geometry import rotation_taking, unit_axis
     from pcrp_core.sources import load_source
     from pcrp_core.sources.views import random_rotation, sensor_view
     from pcrp_ros.bags import BagWriter, cloud_msg, header, T
 
     objects = load_source(source, split=split)
-    if upright and any(o.up != 'z' for o in objects):
-        raise ValueError(
-            f'{source}: --upright needs z-up objects (household, ModelNet40 archives or the '
-            'generator)'
-        )
+    ups = {up_axis or o.up for o in objects}
+    if upright and (None in ups or len(ups) > 1):
+        raise ValueError(f'{source}: --upright needs to know which way is up: give --up-axis, '
+                         'as to pcrp build')
+    stand = rotation_taking(unit_axis(ups.pop()), [0.0, 0.0, 1.0]) if upright else None
     rng = np.random.default_rng(seed)
     order = rng.permutation(len(objects))
     with BagWriter(out, storage) as bag:
@@ -113,11 +117,11 @@ def make_bag(
             index = int(order[k % len(objects)])
             obj = objects[index]
             if obj.mesh is not None and partial:
-                pts, R, t = _camera_view(obj.mesh, index, k, seed, upright, rng)
+                pts, R, t = _camera_view(obj.mesh, index, k, seed, stand, rng)
             else:
                 if upright:
                     yaw = Rotation.from_euler('z', rng.uniform(0.0, 2 * np.pi)).as_matrix()
-                    R = LEVEL_CAMERA @ yaw
+                    R = LEVEL_CAMERA @ yaw @ stand
                 else:
                     R = random_rotation(rng)
                 # in front of the camera (optical frame: z forward), about three object radii away
@@ -169,6 +173,11 @@ def register_make_bag(sub) -> None:
         help='objects standing upright, turned about the vertical only, before a level camera '
         "(then up is 0,-1,0 in the clouds' frame: the node's up_vector, process --up=0,-1,0)",
     )
+    p.add_argument(
+        '--up-axis', choices=['x', 'y', 'z', '-x', '-y', '-z'], default=None,
+        help="with --upright, the objects' up axis in their own frame, as pcrp build takes it "
+        '(default: what the source says: z for the shipped gallery, ModelNet40 and the generator)',
+    )
     p.set_defaults(func=_make_bag)
 
 
@@ -191,6 +200,7 @@ def _make_bag(a) -> int:
             a.frame,
             a.storage,
             a.upright,
+            a.up_axis,
         )
     except ValueError as e:
         print(f'pcrp: error: {e}', file=sys.stderr)

@@ -77,6 +77,24 @@ def test_upright_objects_before_a_level_camera_are_answered_upright_when_told_up
     assert np.sum(err['told'] > 90) + 2 <= np.sum(err['unaided'] > 90), err
 
 
+def test_a_folder_of_meshes_stands_upright_on_the_up_axis_it_is_given(tmp_path):
+    import open3d as o3d
+    from pcrp_ros.bag_commands import UP_IN_LEVEL_CAMERA
+    meshes = tmp_path / 'meshes'
+    meshes.mkdir()
+    for name, size in (('tall', (0.05, 0.2, 0.05)), ('flat', (0.1, 0.02, 0.08))):   # y up
+        o3d.io.write_triangle_mesh(str(meshes / f'{name}.ply'),
+                                   o3d.geometry.TriangleMesh.create_box(*size))
+    with pytest.raises(ValueError, match='--up-axis'):
+        make_bag(tmp_path / 'unsaid', str(meshes), count=2, upright=True)
+    make_bag(tmp_path / 'bag', str(meshes), count=4, upright=True, up_axis='y')
+    clouds, truths, _ = read_bag(tmp_path / 'bag')
+    assert len(clouds) == len(truths) == 4
+    for gt in truths.values():
+        np.testing.assert_allclose(np.array(gt['rotation']) @ [0.0, 1.0, 0.0],
+                                   UP_IN_LEVEL_CAMERA, atol=1e-9)
+
+
 def test_a_recording_cut_short_keeps_its_whole_messages(tmp_path):
     from tools.robustness import truncated_bag
     mcap, sqlite = tmp_path / 'mcap', tmp_path / 'sqlite'
