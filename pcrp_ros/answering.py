@@ -204,9 +204,9 @@ class CloudAnswerer:
                          for k in range(self.settings.workers)]
         for t in self._threads:
             t.start()
-        self._log().info(f'{len(self.engine.model.gallery_ids)} gallery objects '
-                         f"({', '.join(self.engine.model.categories)}), listening on "
-                         f"{', '.join(sub.topic_name for sub in self._subs)}{self._scenes_text()}")
+        # the model's line (configure) has named the gallery
+        self._log().info(f"listening on {', '.join(sub.topic_name for sub in self._subs)}"
+                         f'{self._scenes_text()}')
 
     def deactivate(self) -> None:
         """

@@ -325,22 +325,31 @@ def process_bag(bag, out, model, sensor_at_origin=True, quiet=False, topics=None
                 row.update(true_id=gt['gallery_id'], true_category=gt['category'])
             rows.append(row)
             if not quiet:
-                print(format_row(row), flush=True)
+                print(format_row(row, id_width(model)), flush=True)
     return rows
 
 
-def format_row(row) -> str:
+def id_width(model) -> int:
+    """Return the columns a row gives gallery IDs: the model's longest, at least 14."""
+    return max(14, *(len(g) for g in model.gallery_ids))
+
+
+def format_row(row, width: int = 14) -> str:
+    """One cloud's row under header(width); width: columns for each gallery ID."""
     err = f"{row['rot_err']:7.1f}" if 'rot_err' in row else '      -'
     surface = f"{100 * row['surface_err']:6.1f}%" if 'surface_err' in row else '      -'
     conf = f"{row['confidence']:5.2f}" if 'confidence' in row else '    -'
     lat = f"{row['latency_ms']:7.0f}" if 'latency_ms' in row else '      -'
-    return (f"{row['topic'][:18]:18s} {row['stamp']:>21s} {row.get('true_id', '-')[:14]:14s} "
-            f"{row.get('gallery_id', '-')[:14]:14s} {err} {surface} {conf} {lat}  "
+    return (f"{row['topic'][:18]:18s} {row['stamp']:>21s} "
+            f"{row.get('true_id', '-')[:width]:{width}s} "
+            f"{row.get('gallery_id', '-')[:width]:{width}s} {err} {surface} {conf} {lat}  "
             f"{row.get('status', '')}")
 
 
-HEADER = (f"{'topic':18s} {'stamp':>21s} {'true id':14s} {'answer':14s} "
-          f"{'rot err':>7s} {'ADD-S':>7s} {'conf':>5s} {'lat ms':>7s}  status")
+def header(width: int = 14) -> str:
+    """Return the line over format_row's rows."""
+    return (f"{'topic':18s} {'stamp':>21s} {'true id':{width}s} {'answer':{width}s} "
+            f"{'rot err':>7s} {'ADD-S':>7s} {'conf':>5s} {'lat ms':>7s}  status")
 
 
 def summary(rows) -> str:
@@ -423,7 +432,7 @@ def _process(args) -> int:
     except (ModelError, ValueError) as e:
         print(f'pcrp: error: {e}', file=sys.stderr)
         return 2
-    print(HEADER)
+    print(header(id_width(model)))
     rows = process_bag(
         args.bag,
         args.out,

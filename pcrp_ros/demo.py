@@ -31,7 +31,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     from std_msgs.msg import String
 
     from pcrp_core import PCRP
-    from pcrp_ros.bag_commands import answer_quality, format_row, HEADER, replay, summary
+    from pcrp_ros.bag_commands import answer_quality, format_row, header, replay, summary
     from pcrp_ros.bags import read_bag
     from pcrp_ros.node import PcrpNode
     from pcrp_ros.spinning import init_stopping_on_signals, node_executor
@@ -105,7 +105,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     ex.add_node(client)
     spin = threading.Thread(target=ex.spin, daemon=True)
     spin.start()
-    print(HEADER, flush=True)
+    print(header(), flush=True)
 
     def on_publish(cloud, msg):
         with lock:

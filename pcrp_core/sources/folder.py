@@ -53,6 +53,9 @@ def read_points(path, n_points: int | None = None, seed: int = 0) -> np.ndarray:
         arr = np.load(path, allow_pickle=False)
         if arr.ndim != 2 or arr.shape[1] < 3:
             raise ValueError(f'expected an (N, 3) array, got shape {arr.shape}')
+        if arr.shape[0] == 3 < arr.shape[1]:   # read as it is, three points of N coordinates
+            raise ValueError(f'expected an (N, 3) array, got shape {arr.shape}: one point a row '
+                             '(the transpose of this)')
         return arr[:, :3].astype(np.float64)
     if suffix in MESH_SUFFIXES:
         mesh = o3d.io.read_triangle_mesh(str(path))

@@ -62,6 +62,9 @@ def test_a_missing_model_or_cloud_fails_with_one_clear_line(tmp_path):
     assert out.returncode == 2 and 'no such model' in out.stderr and 'Traceback' not in out.stderr
     out = pcrp('query', 'default', str(tmp_path / 'x.npy'))
     assert out.returncode == 2 and 'x.npy' in out.stderr and 'Traceback' not in out.stderr
+    np.save(tmp_path / 'transposed.npy', np.zeros((3, 500)))
+    out = pcrp('query', 'default', str(tmp_path / 'transposed.npy'))
+    assert out.returncode == 2 and 'one point a row' in out.stderr, out.stderr
     (tmp_path / 'taken').write_text('')
     out = pcrp('build', 'procedural:1', '--out', str(tmp_path / 'taken'))
     assert out.returncode == 2 and 'a file is there' in out.stderr, out.stderr
