@@ -21,8 +21,8 @@ KeyboardInterrupt traceback from the middle of an import, or "ImportError: initi
 from inside a compiled module's. Nothing exists yet that needs cleaning up (ROS is not
 initialised, no file is open for writing), so the process ends at once and quietly: with 0 for
 a node, as a node stopped later does, and 130 for the command, as shells count an interrupt.
-The program's own handling takes over once it is imported (spinning.init_stopping_on_signals
-for the nodes; pcrp_ros.cli for the command).
+The program's own handling takes over from there: the nodes' when they initialise ROS
+(spinning.init_stopping_on_signals), the command's (pcrp_ros.cli) once it is imported.
 """
 import importlib
 import os
@@ -30,26 +30,32 @@ import signal
 
 
 def pcrp() -> int:
-    return _started_quietly('pcrp_ros.cli', 130)
+    return _started_quietly('pcrp_ros.cli', 130, restore=True)
 
 
 def pcrp_node() -> int:
-    return _started_quietly('pcrp_ros.node', 0)
+    return _started_quietly('pcrp_ros.node', 0, restore=False)
 
 
 def pcrp_lifecycle_node() -> int:
-    return _started_quietly('pcrp_ros.lifecycle_node', 0)
+    return _started_quietly('pcrp_ros.lifecycle_node', 0, restore=False)
 
 
-def _started_quietly(module: str, interrupted: int) -> int:
-    """Import module with a signal ending the process at once, then run its main()."""
+def _started_quietly(module: str, interrupted: int, restore: bool) -> int:
+    """
+    Import module with a signal ending the process at once, then run its main().
+
+    restore: put Python's handlers back before main() runs; else main() installs its own.
+    """
     def end_now(signum, frame):
         os._exit(interrupted)
 
-    # a signal the process was started ignoring (a background job's Ctrl-C) stays ignored
+    # The command leaves a signal it was started ignoring (a background job's Ctrl-C) ignored,
+    # as Python does; a node stops on both whatever it inherited, as it will once running.
     handlers = {s: signal.signal(s, end_now) for s in (signal.SIGINT, signal.SIGTERM)
-                if signal.getsignal(s) is not signal.SIG_IGN}
+                if not restore or signal.getsignal(s) is not signal.SIG_IGN}
     main = importlib.import_module(module).main
-    for s, handler in handlers.items():
-        signal.signal(s, handler)
+    if restore:
+        for s, handler in handlers.items():
+            signal.signal(s, handler)
     return main()

@@ -110,7 +110,9 @@ def test_ctrl_c_ends_a_command_with_one_line_and_130(tmp_path):
         [sys.executable, '-c', 'import sys; from pcrp_ros.entry_points import pcrp; '
          'sys.exit(pcrp())', 'build', 'procedural:12', '--out', str(model)],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True,
-        env={**os.environ, 'PYTHONUNBUFFERED': '1'})
+        env={**os.environ, 'PYTHONUNBUFFERED': '1'},
+        # as a terminal starts it: a test run in the background would hand on SIGINT ignored
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         lines = []
         while not lines or (lines[-1] and 'fitting' not in lines[-1]):
