@@ -45,6 +45,7 @@ stream goes on.
 from __future__ import annotations
 
 import collections
+from pathlib import Path
 import sys
 import threading
 import time
@@ -275,6 +276,12 @@ class CloudAnswerer:
 
     # -- parameters ---------------------------------------------------------------------------
     def _on_set_parameters(self, params) -> SetParametersResult:
+        for p in params:
+            # what can be told at once is: the rest of a model's checks come as it loads (reload)
+            if p.name == 'model_path' and p.value and not Path(p.value).is_dir():
+                return SetParametersResult(successful=False, reason=(
+                    f'{p.value}: no such model directory (a model is a directory holding '
+                    'model.json and arrays.npz)'))
         changes = {p.name: p.value for p in params if p.name in MODEL_SETTINGS}
         up = [p.value for p in params if p.name == 'up_vector']
         with self._cv:

@@ -161,6 +161,10 @@ def test_a_bad_model_is_refused_and_the_old_one_kept(node_and_stream, tmp_path, 
     broken = _copy(tmp_path, 'broken')
     _damage(broken)
     stream.thread.start()
+    # a path with no model directory is refused at once, as `ros2 param set` shows it
+    missing = node.set_parameters([Parameter('model_path', value=str(tmp_path / 'none'))])[0]
+    assert not missing.successful and 'no such model' in missing.reason
+    assert node.get_parameter('model_path').value == model_a
     assert node.set_parameters([Parameter('model_path', value=broken)])[0].successful
     # the parameter goes back to the model still answering, which /diagnostics says why
     assert wait_for(lambda: node.get_parameter('model_path').value == model_a, 60)
