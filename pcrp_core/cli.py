@@ -40,6 +40,10 @@ _SIGNED_VALUE = re.compile(r'-(?:[xyz]|[\d.][\d.,eE+-]*)')
 
 def _progress(it, **kw):
     from tqdm import tqdm
+    if not sys.stderr.isatty():
+        # tqdm draws nothing into a log or a pipe, where a build then said nothing for minutes:
+        # a line as each stage starts says it is alive and where
+        print(f"pcrp: {kw.get('desc', 'working')}...", file=sys.stderr, flush=True)
     return tqdm(it, leave=False, file=sys.stderr, disable=None, **kw)
 
 

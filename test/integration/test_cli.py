@@ -33,6 +33,8 @@ def test_build_a_gallery_then_query_a_cloud_file(tmp_path):
     built = pcrp('build', 'procedural:4', '--out', str(model))
     assert built.returncode == 0, built.stderr
     assert '16 objects' in built.stdout and 'MB on disk' in built.stdout
+    # no terminal, so no progress bars: a line as each stage starts, for a log to show
+    assert 'pcrp: features...' in built.stderr and 'pcrp: calibration...' in built.stderr
     from pcrp_core.sources.procedural import generate_object
     from scipy.spatial.transform import Rotation
     R = Rotation.from_euler('zyx', [40, -20, 70], degrees=True).as_matrix()
