@@ -25,7 +25,10 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field, fields
+import numbers
 from typing import Any
+
+import numpy as np
 
 
 def setting(default, doc: str, *, low=None, high=None, choices=None, low_open: bool = False,
@@ -66,15 +69,16 @@ def _check(name: str, value, default, meta: dict):
         ):
             raise ValueError(f'{name}: expected a list of {element.__name__}, got {value!r}')
         return tuple(element(v) for v in value)
+    # numpy's scalars count as the numbers they are (a value read from an array is one)
     if kind is bool:
-        if not isinstance(value, bool):
+        if not isinstance(value, (bool, np.bool_)):
             raise ValueError(f'{name}: expected true or false, got {value!r}')
-        return value
+        return bool(value)
     if kind in (int, float):
         if (
-            isinstance(value, bool)
-            or not isinstance(value, (int, float))
-            or (kind is int and not isinstance(value, int))
+            isinstance(value, (bool, np.bool_))
+            or not isinstance(value, numbers.Real)
+            or (kind is int and not isinstance(value, numbers.Integral))
         ):
             raise ValueError(
                 f"{name}: expected {'an integer' if kind is int else 'a number'}, got {value!r}"

@@ -19,8 +19,9 @@ class InvalidCloud(ValueError):
     """
     The input cannot be answered (too few finite points, degenerate geometry...).
 
-    ``reason`` is a short stable key (``"too_few_points"``, ``"non_finite"``,
-    ``"degenerate"``) that the node counts rejections under.
+    ``reason`` is a short stable key that the node counts rejections under: ``"bad_shape"``
+    (not an (N, 3) numeric array), ``"empty"``, ``"no_finite_points"``, ``"too_few_points"``,
+    ``"degenerate"`` (all points equal or on a line).
     """
 
     def __init__(self, reason: str, message: str):

@@ -135,6 +135,13 @@ class PCRP:
             )
             changes.setdefault('min_confidence', changes.pop('min_score'))
             changes.pop('min_score', None)
+        # every name a user may set, so that a mistyped one is told all of them
+        known = {*QueryOptions.__dataclass_fields__, *USER_POSE_SETTINGS,
+                 *InstanceOptions.__dataclass_fields__}
+        unknown = sorted(set(changes) - known)
+        if unknown:
+            raise ValueError(f"unknown setting {', '.join(unknown)}; known: "
+                             f"{', '.join(sorted(known))}")
         pose = {k: changes.pop(k) for k in list(changes) if k in USER_POSE_SETTINGS}
         instance = {
             k: changes.pop(k) for k in list(changes) if k in InstanceOptions.__dataclass_fields__
@@ -404,7 +411,8 @@ class PCRP:
         """
         Which gallery object the cloud is, and its pose.
 
-        Raises InvalidCloud for input no pose can be read from.
+        Raises InvalidCloud for a cloud no pose can be read from, and ValueError, saying what is
+        expected, for a viewpoint, up or scene that cannot be one.
 
         viewpoint: the sensor's position in the cloud's frame when the cloud is what one sensor saw
         (np.zeros(3) for a cloud in the camera's own frame); None for complete objects. up: which
@@ -423,6 +431,7 @@ class PCRP:
         # mixes into a cloud already being answered
         opts, pose_opts = self.options, self.pose_options
         up_pair = None if up is None else (self.check_up(up), self.up_axis)
+        viewpoint, scene = _checked_viewpoint(viewpoint), _checked_scene(scene)
         pts = clean(points, min(opts.max_points, self.n_points), opts.min_points, opts.seed)
         timings = {'preprocess': time.perf_counter() - t0}
         if self.uses_views(viewpoint, opts):
@@ -431,3 +440,28 @@ class PCRP:
                 scene,
             )
         return category.answer(self, pts, viewpoint, up_pair, opts, pose_opts, timings, t0)
+
+
+def _checked_viewpoint(viewpoint) -> np.ndarray | None:
+    """Return viewpoint as three floats; ValueError, saying what is expected, if it is not."""
+    if viewpoint is None:
+        return None
+    try:
+        v = np.asarray(viewpoint, dtype=np.float64)
+    except (TypeError, ValueError):
+        v = np.empty(0)
+    if v.shape != (3,) or not np.isfinite(v).all():
+        raise ValueError(f"viewpoint {viewpoint!r}: expected three finite numbers, the sensor's "
+                         "position in the cloud's frame ([0, 0, 0] in the camera's own frame)")
+    return v
+
+
+def _checked_scene(scene):
+    """Return scene unchanged if it is a DepthImage or numeric points; ValueError if not."""
+    if scene is None or isinstance(scene, DepthImage):
+        return scene
+    arr = np.asarray(scene)
+    if not np.issubdtype(arr.dtype, np.number) or arr.ndim < 2 or arr.shape[-1] != 3:
+        raise ValueError(f"scene: expected a DepthImage or (M, 3) points in the cloud's frame, "
+                         f'got {type(scene).__name__} of shape {arr.shape}')
+    return scene

@@ -44,11 +44,23 @@ class DepthImage:
     def __post_init__(self):
         # drivers and users mark "no depth" with 0 or NaN as often as with inf; all of them
         # must hide nothing, where a 0 taken as a depth would hide everything behind it
-        z = np.asarray(self.z, dtype=np.float32)
+        z = np.asarray(self.z)
+        if z.ndim != 2 or not np.issubdtype(z.dtype, np.number):
+            raise ValueError(f'DepthImage: expected (rows, columns) depths in metres, got '
+                             f'{z.dtype} of shape {z.shape}')
+        if np.issubdtype(z.dtype, np.integer):
+            # a driver's 16UC1 image is millimetres: read as metres it is a wall 700 m away
+            raise ValueError(f'DepthImage: depths are metres, got {z.dtype} (a 16UC1 depth '
+                             'image is millimetres: give depth * 0.001)')
+        z = z.astype(np.float32, copy=False)
         with np.errstate(invalid='ignore'):
             self.z = np.where(z > 0, z, np.float32(np.inf))
         self.focal = np.asarray(self.focal, dtype=np.float64).reshape(2)
         self.centre = np.asarray(self.centre, dtype=np.float64).reshape(2)
+        if not (np.isfinite(self.focal).all() and (self.focal > 0).all()
+                and np.isfinite(self.centre).all()):
+            raise ValueError(f'DepthImage: focal lengths {self.focal.tolist()} must be positive '
+                             f'and the centre {self.centre.tolist()} finite (pixels)')
 
     @classmethod
     def from_organized(cls, points: np.ndarray) -> DepthImage | None:

@@ -76,6 +76,19 @@ def test_degenerate_geometry_is_answered_or_refused(model, name, cloud):
     assert isinstance(out, str) or np.isfinite(out.transform).all()
 
 
+@pytest.mark.parametrize('viewpoint, scene, said', [
+    ([0.0, 0.0], None, 'viewpoint'), ([np.nan, 0.0, 0.0], None, 'viewpoint'),
+    ('origin', None, 'viewpoint'), ([0.0, 0.0, 0.0], 'depth.png', 'scene'),
+    ([0.0, 0.0, 0.0], np.zeros((5, 2)), 'scene'),
+])
+def test_a_bad_viewpoint_or_scene_is_refused_saying_what_is_expected(
+        model, viewpoint, scene, said):
+    """They failed deep inside as numpy's broadcasting or type errors, or scipy's."""
+    cloud = model.gallery_cloud(model.gallery_ids[0]).astype(np.float64) + [0.0, 0.0, 2.0]
+    with pytest.raises(ValueError, match=f'^{said}'):
+        model.estimate(cloud, viewpoint=viewpoint, scene=scene)
+
+
 @pytest.mark.parametrize('seed', [0, 1])
 def test_screening_on_arrival_refuses_what_cleaning_does_and_keeps_the_answer(model, seed):
     # what a stream screens as clouds arrive must be what estimate() would refuse, and the

@@ -16,6 +16,7 @@
 import numpy as np
 from pcrp_core.instance.depth_image import DepthImage
 from pcrp_core.instance.occlusion import hidden, occluders, seen_from
+import pytest
 
 FOCAL, CENTRE, SHAPE = np.array([580.0, 585.0]), np.array([322.3, 237.9]), (480, 640)
 
@@ -98,3 +99,14 @@ def test_zero_and_nan_depths_are_nothing_measured_and_hide_nothing():
     behind_zeros = np.array([[-0.2, 0.1, 0.9]])
     occ = occluders(image, cloud, 0.01, 0.3)
     assert not hidden(behind_zeros, occ, 0.003).any()
+
+
+@pytest.mark.parametrize('z, focal, said', [
+    (np.full((4, 4), 700, np.uint16), [60.0, 60.0], 'millimetres'),   # a raw 16UC1 image
+    (np.ones(16), [60.0, 60.0], 'rows, columns'),
+    (np.ones((4, 4)), [0.0, 60.0], 'focal lengths'),
+    (np.ones((4, 4)), [np.nan, 60.0], 'focal lengths'),
+])
+def test_an_image_that_cannot_be_metres_from_a_pinhole_is_refused_saying_why(z, focal, said):
+    with pytest.raises(ValueError, match=said):
+        DepthImage(z, focal, [2.0, 2.0])

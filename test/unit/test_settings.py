@@ -20,6 +20,8 @@ table, the node's descriptors.
 """
 from pathlib import Path
 
+import numpy as np
+from pcrp_core import PCRP
 from pcrp_core.config import PAPER_POSE, PoseOptions, QueryOptions
 from pcrp_ros.parameters import descriptor, markdown_table, NodeSettings, parameters, params_file
 import pytest
@@ -61,6 +63,20 @@ def test_every_parameter_has_a_descriptor_with_its_bounds():
 def test_a_bad_value_is_refused_with_what_is_expected(options, change, message):
     with pytest.raises(ValueError, match=message):
         options(**change)
+
+
+def test_numpy_scalars_are_the_numbers_they_are_and_a_wrong_name_hears_every_name():
+    """np.int64 was 'expected an integer'; a mistyped name heard only the query settings."""
+    model = PCRP.load(None)
+    model.set_params(yaw_steps=np.int64(24), min_confidence=np.float32(0.25), refine=np.bool_(0))
+    assert model.instance_options.yaw_steps == 24 and type(model.instance_options.yaw_steps) is int
+    assert model.options.min_confidence == pytest.approx(0.25) and not model.pose_options.refine
+    with pytest.raises(ValueError, match='expected an integer'):
+        model.set_params(yaw_steps=np.float64(2.5))
+    with pytest.raises(ValueError, match='unknown setting yaw_stepz') as said:
+        model.set_params(yaw_stepz=3)
+    for name in ('n_candidates', 'local_shape_cost', 'refine', 'up_tolerance_deg', 'yaw_steps'):
+        assert name in str(said.value)
 
 
 def test_replace_checks_again_and_leaves_the_original_alone():
