@@ -34,7 +34,7 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     from pcrp_ros.bag_commands import answer_quality, format_row, header, replay, summary
     from pcrp_ros.bags import read_bag
     from pcrp_ros.node import PcrpNode
-    from pcrp_ros.spinning import init_stopping_on_signals, node_executor
+    from pcrp_ros.spinning import init_stopping_on_signals, spinning
 
     bag = bag or str(DEMO_BAG)
     _, truths, _ = read_bag(bag)
@@ -100,35 +100,28 @@ def run(model_path=None, bag=None, rate_factor=1.0) -> int:
     client = rclpy.create_node('pcrp_demo')
     client.create_subscription(String, '/segmented_object/gallery_id', on_id, 10)
     client.create_subscription(PoseStamped, '/segmented_object/pose', on_pose, 10)
-    ex = node_executor()
-    ex.add_node(node)
-    ex.add_node(client)
-    spin = threading.Thread(target=ex.spin, daemon=True)
-    spin.start()
     print(header(), flush=True)
 
     def on_publish(cloud, msg):
         with lock:
             sent[(msg.header.stamp.sec, msg.header.stamp.nanosec)] = (cloud, time.monotonic())
+
+    def decided():
+        counts = node.stats['segmented_object'].snapshot()
+        return sum(counts.get(k, 0) for k in ('answered', 'rejected', 'dropped_stale'))
     try:
-        n = replay(client, bag, rate_factor, True, None, on_publish)
-        end = time.monotonic() + 30.0
-        while (
-            time.monotonic() < end
-            and node.stats['segmented_object'].snapshot().get('answered', 0)
-            + node.stats['segmented_object'].snapshot().get('rejected', 0)
-            + node.stats['segmented_object'].snapshot().get('dropped_stale', 0)
-            < n
-        ):
-            time.sleep(0.1)
-        time.sleep(0.5)
-    except KeyboardInterrupt:
-        print('\ndemo stopped by Ctrl-C', flush=True)
+        # the executor's thread has stopped before the nodes are destroyed (spinning)
+        with spinning(None, node, client):
+            try:
+                n = replay(client, bag, rate_factor, True, None, on_publish)
+                end = time.monotonic() + 30.0
+                while time.monotonic() < end and decided() < n:
+                    time.sleep(0.1)
+                time.sleep(0.5)
+            except KeyboardInterrupt:
+                print('\ndemo stopped by Ctrl-C', flush=True)
+            snap = node.stats['segmented_object'].snapshot()
     finally:
-        snap = node.stats['segmented_object'].snapshot()
-        ex.shutdown(timeout_sec=2.0)
-        node.destroy_node()
-        client.destroy_node()
         rclpy.try_shutdown()
     print(f"\nnode: received {snap.get('received', 0)}, answered {snap.get('answered', 0)}, "
           f"rejected {snap.get('rejected', 0)}, dropped as stale {snap.get('dropped_stale', 0)}")

@@ -86,9 +86,27 @@ def _spin_thread(executor, stop, done, failed: list, step: float) -> threading.T
         except BaseException as e:   # told to whoever waits on done, which decides
             failed.append(e)
         finally:
+            _callbacks_finished(executor)
             done.set()
 
     return threading.Thread(target=spin, name='executor', daemon=True)
+
+
+def _callbacks_finished(executor, timeout: float = 2.0) -> bool:
+    """
+    Wait until the callbacks a multi-threaded executor handed to its threads have returned.
+
+    Executor.shutdown() is meant to, but rclpy 7.1's never waits (it tests its shutdown flag just
+    after setting it): a callback taken just before the stop then ran against destroyed nodes
+    ('cannot use Destroyable because destruction was requested', a cloud received and never
+    counted). The executor keeps them in _futures; nothing public lists them.
+    """
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if all(task.done() for task in list(getattr(executor, '_futures', ()))):
+            return True
+        time.sleep(0.01)
+    return False
 
 
 def init_stopping_on_signals(args=None) -> None:
