@@ -211,8 +211,8 @@ def register_query(sub) -> None:
         '--up',
         default=None,
         metavar='X,Y,Z',
-        help="which way is up in the cloud's frame, if known: answers then keep the object "
-        'upright within --up-tolerance',
+        help="which way is up in the cloud's frame, if known: the search for a pose then keeps "
+        'the object upright within --up-tolerance (refinement follows the cloud)',
     )
     p.add_argument('--up-tolerance', type=float, default=None, metavar='DEG',
                    help='how far an answer may tip the object from --up (default 60)')

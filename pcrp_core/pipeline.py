@@ -416,8 +416,9 @@ class PCRP:
 
         viewpoint: the sensor's position in the cloud's frame when the cloud is what one sensor saw
         (np.zeros(3) for a cloud in the camera's own frame); None for complete objects. up: which
-        way is up in the cloud's frame (against gravity), when the caller knows it; answers then
-        keep the gallery's up axis (`up_axis`) on it. None: any orientation. scene: (M, 3) the rest
+        way is up in the cloud's frame (against gravity), when the caller knows it; the search
+        for a pose then keeps the gallery's up axis (`up_axis`) on it, and refinement follows the
+        cloud (docs/method.md). None: any orientation. scene: (M, 3) the rest
         of what the sensor measured, in the cloud's frame (its whole depth cloud will do: NaNs, the
         object's own points and the background are fine), or its DepthImage (faster: an organized
         depth cloud read with DepthImage.from_organized), so that surface something in front of
