@@ -117,6 +117,11 @@ class CloudAnswerer:
         if unknown:
             self._log().warning('parameters this node does not have, ignored: '
                                 f"{', '.join(unknown)}")
+        # what this node was told, in the log a robot keeps, beside what it then answered
+        told = [f"{spec['name']} {values[spec['name']]}" for spec in parameters()
+                if values[spec['name']] != ros_value(spec['default'])]
+        if told:
+            self._log().info(f"parameters set: {', '.join(told)}")
         self.engine = None
         self.stats: dict[str, StreamStats] = {}
         self._resolved = {}

@@ -308,7 +308,8 @@ def test_a_parameter_the_node_does_not_have_is_named_with_the_nearest_it_has():
     import subprocess
     import sys
     proc = subprocess.Popen([sys.executable, '-m', 'pcrp_ros.node', '--ros-args', '-p',
-                             'min_confidance:=0.3', '-p', 'frobnicate:=1'],
+                             'min_confidance:=0.3', '-p', 'frobnicate:=1', '-p',
+                             'up_vector:=[0.0, -1.0, 0.0]'],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env=own_domain_env(60))
     try:
@@ -318,6 +319,9 @@ def test_a_parameter_the_node_does_not_have_is_named_with_the_nearest_it_has():
         proc.wait()
     said = [line for line in lines if 'does not have' in line]
     assert said and 'frobnicate, min_confidance (did you mean min_confidence?)' in said[0], lines
+    # and what it was told that it has, only that: min_confidence is still its default
+    told = [line for line in lines if 'parameters set:' in line]
+    assert told and told[0].rstrip().endswith('parameters set: up_vector [0.0, -1.0, 0.0]'), lines
 
 
 @pytest.mark.parametrize('override', ['min_points:=3.5', 'up_vector:=[0, -1, 0]', 'min_points:=2'])
