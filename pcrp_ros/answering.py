@@ -117,11 +117,6 @@ class CloudAnswerer:
         if unknown:
             self._log().warning('parameters this node does not have, ignored: '
                                 f"{', '.join(unknown)}")
-        # what this node was told, in the log a robot keeps, beside what it then answered
-        told = [f"{spec['name']} {values[spec['name']]}" for spec in parameters()
-                if values[spec['name']] != ros_value(spec['default'])]
-        if told:
-            self._log().info(f"parameters set: {', '.join(told)}")
         self.engine = None
         self.stats: dict[str, StreamStats] = {}
         self._resolved = {}
@@ -166,6 +161,15 @@ class CloudAnswerer:
             Trigger, '~/reload_model', self._on_reload_service,
             callback_group=MutuallyExclusiveCallbackGroup())
         self._log().info(f'model: {self.engine.describe()}, {self._workers_text()}')
+        # what this node was told, in the log a robot keeps, beside the model it answers with (a
+        # start that fails says only why)
+        told = []
+        for spec in parameters():
+            value = _or_default(self._param(spec['name']), spec['default'])
+            if value != ros_value(spec['default']):
+                told.append(f"{spec['name']} {value}")
+        if told:
+            self._log().info(f"parameters set: {', '.join(told)}")
 
     def activate(self) -> None:
         """Subscribe, create the publishers and /diagnostics, start answering."""
