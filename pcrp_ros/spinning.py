@@ -58,41 +58,53 @@ def spin_until_interrupted(executor, step: float = 0.2) -> None:
     spin_until_future_complete adds a callback to the future at every turn, which a node
     spinning for days would pile up.
     """
-    stop, done, failed = threading.Event(), threading.Event(), []
+    spinner = _Spinner(executor, step)
     # Started inside the try: a Ctrl-C can land while start() waits for the thread, and a thread
     # still in rcl's wait when the interpreter exits aborts it (std::terminate at pthread_exit).
     try:
-        _spin_thread(executor, stop, done, failed, step).start()
-        while not done.wait(0.5):
+        spinner.start()
+        while not spinner.done.wait(0.5):
             pass
     finally:
-        stop.set()
-        done.wait(5.0)
-    if failed:
-        raise failed[0]
+        spinner.halt()
+    spinner.raise_failure()
 
 
-def _spin_thread(executor, stop, done, failed: list, step: float) -> threading.Thread:
+class _Spinner(threading.Thread):
     """
-    Return a thread that spins the executor until stop is set or its context is shut down.
+    A thread that spins an executor until halted or its context is shut down.
 
-    It sets done when it has left the executor (what it raised is put in failed): only then may
-    the nodes be destroyed and the executor shut down, which destroys what the wait it was in used.
+    done is set once it has left the executor: only then may the nodes be destroyed and the
+    executor shut down, which destroys what the wait it was in used.
     """
-    def spin():
+
+    def __init__(self, executor, step: float):
+        super().__init__(name='executor', daemon=True)
+        self.executor, self.step = executor, step
+        self.done, self._halt = threading.Event(), threading.Event()
+        self.failure = None   # what the executor raised, for whoever waits on done to decide
+
+    def run(self):
         try:
-            while not stop.is_set() and executor.context.ok():
-                executor.spin_once(timeout_sec=step)
-        except BaseException as e:   # told to whoever waits on done, which decides
-            failed.append(e)
+            while not self._halt.is_set() and self.executor.context.ok():
+                self.executor.spin_once(timeout_sec=self.step)
+        except BaseException as e:
+            self.failure = e
         finally:
-            _callbacks_finished(executor)
-            done.set()
+            _wait_for_callbacks(self.executor)
+            self.done.set()
 
-    return threading.Thread(target=spin, name='executor', daemon=True)
+    def halt(self) -> None:
+        """Tell the thread to stop and wait (5 s at most) until it has left the executor."""
+        self._halt.set()
+        self.done.wait(5.0)
+
+    def raise_failure(self) -> None:
+        if self.failure is not None:
+            raise self.failure
 
 
-def _callbacks_finished(executor, timeout: float = 2.0) -> bool:
+def _wait_for_callbacks(executor, timeout: float = 2.0) -> None:
     """
     Wait until the callbacks a multi-threaded executor handed to its threads have returned.
 
@@ -104,9 +116,8 @@ def _callbacks_finished(executor, timeout: float = 2.0) -> bool:
     end = time.monotonic() + timeout
     while time.monotonic() < end:
         if all(task.done() for task in list(getattr(executor, '_futures', ()))):
-            return True
+            return
         time.sleep(0.01)
-    return False
 
 
 def init_stopping_on_signals(args=None) -> None:
@@ -147,18 +158,16 @@ def spinning(ctx, *nodes):
     ex = node_executor(ctx)
     for n in nodes:
         ex.add_node(n)
-    stop, done, failed = threading.Event(), threading.Event(), []
-    _spin_thread(ex, stop, done, failed, 0.1).start()
+    spinner = _Spinner(ex, 0.1)
+    spinner.start()
     try:
         yield ex
     finally:
-        stop.set()
-        done.wait(5.0)
+        spinner.halt()
         ex.shutdown(timeout_sec=2.0)
         for n in nodes:
             n.destroy_node()
-    if failed:
-        raise failed[0]
+    spinner.raise_failure()
 
 
 def wait_for(predicate, timeout=30.0, step=0.05):
