@@ -450,6 +450,12 @@ class InstanceOptions(Options):
         'poor fit costs less, and the view hypotheses saw a cut silhouette; .inf never.',
         low=0.0,
     )
+    drop_strays: bool = setting(
+        True,
+        'Clouds matched view by view: first set aside the points lying apart from the object '
+        "(background pixels a mask took in, flying pixels at the object's edges, a speck of "
+        'something else), which otherwise throw the answer off.',
+    )
     local_shape_objects: int = setting(
         12, "Objects looked for then: those whose views have the cloud's shape, nearest first.",
         low=1,
@@ -490,8 +496,8 @@ class InstanceOptions(Options):
 # the pose settings a user tunes beside QueryOptions (the node's parameters)
 USER_POSE_SETTINGS = ('refine', 'up_tolerance_deg')
 # and the view-by-view ones: when to look again by local shape, time traded for partly hidden
-# objects (docs/node.md)
-USER_INSTANCE_SETTINGS = ('local_shape_cost', 'local_shape_cost_hidden')
+# objects (docs/node.md), and whether a view's strays are set aside (for a segmenter known clean)
+USER_INSTANCE_SETTINGS = ('local_shape_cost', 'local_shape_cost_hidden', 'drop_strays')
 
 # The paper's registration: feature matches within the symmetry halves, Procrustes in RANSAC,
 # the best-fitting of those hypotheses; one retrieved object, no principal-axis, half-turn or

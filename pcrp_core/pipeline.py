@@ -23,6 +23,7 @@ viewpoint, in metres (instance/answer.py), else by PCRP's retrieval and registra
 from __future__ import annotations
 
 import copy
+import dataclasses
 from pathlib import Path
 import time
 import warnings
@@ -43,9 +44,10 @@ from pcrp_core.gallery import Gallery
 from pcrp_core.geometry import normalised, rms_radius, unit_axis, unit_vector
 from pcrp_core.instance.depth_image import DepthImage
 from pcrp_core.instance.templates import Templates
-from pcrp_core.preprocess import clean, screen, Screened
+from pcrp_core.preprocess import check_geometry, clean, screen, Screened, spread
 from pcrp_core.result import PoseResult
 from pcrp_core.retrieval import describe, PreparedCache
+from pcrp_core.strays import strays
 from pcrp_core.threads import threads_from_environment
 from pcrp_core.vlad import VLAD
 
@@ -321,15 +323,29 @@ class PCRP:
         return model
 
     # -- querying -------------------------------------------------------------------------------
-    def prepare(self, points) -> np.ndarray:
+    def prepare(self, points, viewpoint=None) -> np.ndarray:
         """
-        Return the cloud as estimate() will use it.
+        Return the cloud as estimate(points, viewpoint) will use it.
 
         Finite, at most max_points, checked for geometry a pose can be read from (raises
-        InvalidCloud otherwise).
+        InvalidCloud otherwise); a cloud matched view by view has its strays set aside first
+        (the setting drop_strays, pcrp_core/strays.py).
         """
-        opts = self.options
-        return clean(points, min(opts.max_points, self.n_points), opts.min_points, opts.seed)
+        return self._prepared(points, _checked_viewpoint(viewpoint), self.options)[0]
+
+    def _prepared(self, points, viewpoint, opts: QueryOptions) -> tuple[np.ndarray, float]:
+        """Return prepare()'s cloud and the share of the screened points set aside as strays."""
+        n = min(opts.max_points, self.n_points)
+        if not (self.uses_views(viewpoint, opts) and self.instance_options.drop_strays):
+            return clean(points, n, opts.min_points, opts.seed), 0.0
+        if not isinstance(points, Screened):
+            points = screen(points, n, opts.min_points, opts.seed)
+        cloud = points.points
+        apart = strays(cloud, float(self.templates.diameter.max()))
+        if apart.any():
+            cloud = cloud[~apart]
+            check_geometry(cloud, opts.min_points)
+        return spread(cloud, n), float(apart.mean())
 
     def screen(self, points) -> Screened:
         """
@@ -423,6 +439,8 @@ class PCRP:
         object's own points and the background are fine), or its DepthImage (faster: an organized
         depth cloud read with DepthImage.from_organized), so that surface something in front of
         the object hid is not taken for missing; used when the cloud is answered view by view.
+        A cloud answered view by view first has the points lying apart from the object set aside
+        (instance setting drop_strays; the result's stray_share says how many).
         """
         from pcrp_core.category import answer as category
         from pcrp_core.instance import answer as views
@@ -433,13 +451,13 @@ class PCRP:
         opts, pose_opts = self.options, self.pose_options
         up_pair = None if up is None else (self.check_up(up), self.up_axis)
         viewpoint, scene = _checked_viewpoint(viewpoint), _checked_scene(scene)
-        pts = clean(points, min(opts.max_points, self.n_points), opts.min_points, opts.seed)
+        pts, stray_share = self._prepared(points, viewpoint, opts)
         timings = {'preprocess': time.perf_counter() - t0}
         if self.uses_views(viewpoint, opts):
-            return views.answer(
+            return dataclasses.replace(views.answer(
                 self, pts, np.asarray(viewpoint, dtype=np.float64), up_pair, opts, timings, t0,
                 scene,
-            )
+            ), stray_share=stray_share)
         return category.answer(self, pts, viewpoint, up_pair, opts, pose_opts, timings, t0)
 
 

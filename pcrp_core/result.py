@@ -47,6 +47,8 @@ class PoseResult:
     twins: tuple = ()
     timings: dict = field(default_factory=dict)  # seconds per stage, plus "total"
     n_points: int = 0             # points used after cleaning and downsampling
+    # share of a camera view's points set aside as lying apart from the object (strays.py)
+    stray_share: float = 0.0
 
     @property
     def transform(self) -> np.ndarray:
@@ -84,4 +86,5 @@ class PoseResult:
             'twins': list(self.twins),
             'timings': {k: float(v) for k, v in self.timings.items()},
             'n_points': int(self.n_points),
+            'stray_share': float(self.stray_share),
         }

@@ -18,6 +18,7 @@ import open3d as o3d
 from pcrp_core import PCRP
 from pcrp_core.evaluation.metrics import add_s
 from pcrp_core.evaluation.scenes import sample_scene
+from pcrp_core.geometry import rotation_angle_deg
 from pcrp_core.instance.matcher import InstanceMatcher
 from pcrp_core.sources.camera import Mesh
 from pcrp_core.sources.gallery_object import GalleryObject
@@ -191,3 +192,22 @@ def test_a_poor_fit_has_more_poses_refined_before_local_shape():
     r = model.estimate(points, viewpoint=np.zeros(3))
     assert r.gallery_id == 'drill' and rotation_angle_deg(r.rotation, truth['rotation']) < 2
     assert 'local_shape' not in r.timings and not r.rejected
+
+
+def test_background_a_mask_took_in_is_set_aside_before_a_view_is_matched(mesh_model):
+    # 20 points of a wall half a metre behind the object, as a mask a little too wide takes in
+    model, meshes = mesh_model
+    scene = sample_scene(meshes['ell'], 'ell', 4, 0, 'free', seed=9)
+    wall = scene.points.mean(0) + [0.0, 0.0, 0.5] + np.random.default_rng(0).normal(
+        0, 0.005, (20, 3))
+    dirty = np.vstack([scene.points, wall])
+    camera = np.zeros(3)
+    assert model.prepare(dirty, viewpoint=camera)[:, 2].max() < wall[:, 2].min()
+    clean, answer = model.estimate(scene.points, camera), model.estimate(dirty, camera)
+    assert clean.stray_share == 0.0 and 0.0 < answer.stray_share < 0.05
+    assert answer.gallery_id == clean.gallery_id == 'ell'
+    assert rotation_angle_deg(answer.rotation, clean.rotation) < 2.0
+    # the setting turns it off; whole clouds (no viewpoint) are never cut
+    kept = model.with_options(drop_strays=False).prepare(dirty, viewpoint=camera)
+    assert kept[:, 2].max() >= wall[:, 2].min()
+    assert model.prepare(dirty)[:, 2].max() >= wall[:, 2].min()
