@@ -19,7 +19,7 @@ import argparse
 import sys
 
 from pcrp_core.cli import run
-from tools import bench, robot_report, robustness, soak
+from tools import bench, robot_report, robustness, segmentation_report, soak
 from tools.paper_eval import command as paper_eval
 
 
@@ -31,7 +31,7 @@ def main(argv=None) -> int:
     )
     sub = parser.add_subparsers(dest='command', required=True)
     for register in (paper_eval.register_eval, bench.register, robustness.register, soak.register,
-                     robot_report.register):
+                     robot_report.register, segmentation_report.register):
         register(sub)
     return run(parser, argv)
 

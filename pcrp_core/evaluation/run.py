@@ -104,7 +104,7 @@ def record(scene: Scene, answer, seconds: float, truths: Truths, reason: str = '
            'gallery_id': None, 'right_object': False, 'twin': False, 'right_or_twin': False,
            'add': None, 'add_s': None, 'surface_error': None, 'pose_right': False,
            'rotation_error_deg': None, 'translation_error': None, 'rejected': True,
-           'reason': reason, 'confidence': 0.0, 'candidate_rank': None,
+           'reason': reason, 'confidence': 0.0, 'candidate_rank': None, 'stray_share': 0.0,
            'seconds': float(seconds), 'timings': {}}
     if answer is None:
         return row
@@ -119,6 +119,7 @@ def record(scene: Scene, answer, seconds: float, truths: Truths, reason: str = '
     row.update(gallery_id=answer.gallery_id, right_object=bool(right), twin=bool(twin),
                right_or_twin=bool(right or twin), rejected=bool(answer.rejected),
                reason=answer.reason, confidence=float(confidence), candidate_rank=rank,
+               stray_share=float(getattr(answer, 'stray_share', 0.0)),
                timings={k: float(v) for k, v in (getattr(answer, 'timings', None) or {}).items()})
     R = np.asarray(answer.rotation, dtype=np.float64)
     t = np.asarray(answer.translation, dtype=np.float64)
