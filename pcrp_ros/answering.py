@@ -546,7 +546,8 @@ class CloudAnswerer:
             self.reject(topic, e.reason, str(e))
             return
         stats = self.stats[topic]
-        stats.estimated(result.timings, None if result.rejected else result.confidence)
+        stats.estimated(result.timings, None if result.rejected else result.confidence,
+                        result.stray_share)
         self._tell(topic, header, result)
         if result.rejected:
             self.reject(topic, 'low_confidence', result.reason)

@@ -40,6 +40,8 @@ class StreamStats:
         self.latency = deque(maxlen=window)  # seconds from receipt to publication
         self.age = deque(maxlen=window)      # seconds from the cloud's stamp to publication
         self.confidence = deque(maxlen=window)  # of the answers published
+        self.strays = deque(maxlen=window)  # share of each estimate's points set aside as strays
+        self.with_strays = 0                # estimates that set some aside
         self.stages = {}                    # stage -> seconds of the last `window` estimates
         self.streak = 0                     # rejections since the last answer
         self.recent = deque(maxlen=RECENT)  # how the last clouds were decided
@@ -78,13 +80,21 @@ class StreamStats:
             self.latency.append(latency)
             self.age.append(age)
 
-    def estimated(self, timings: dict, confidence: float | None = None) -> None:
-        """Record one estimate: its stage timings, and the confidence of a published answer."""
+    def estimated(self, timings: dict, confidence: float | None = None,
+                  stray_share: float = 0.0) -> None:
+        """
+        Record one estimate: its stage timings, the confidence of a published answer, strays.
+
+        stray_share: the share of its points set aside as lying apart from the object (a
+        segmenter's mask that takes in background or flying pixels).
+        """
         with self._lock:
             for stage, seconds in timings.items():
                 self.stages.setdefault(stage, deque(maxlen=self._window)).append(float(seconds))
             if confidence is not None:
                 self.confidence.append(float(confidence))
+            self.strays.append(float(stray_share))
+            self.with_strays += stray_share > 0
 
     def snapshot(self) -> dict:
         with self._lock:
@@ -100,6 +110,9 @@ class StreamStats:
             if self.confidence:
                 out['confidence_last'] = self.confidence[-1]
                 out['confidence_mean'] = float(np.mean(self.confidence))
+            if self.strays:
+                out['with_strays'] = self.with_strays
+                out['stray_share_mean'] = float(np.mean(self.strays))
             return out
 
     def status(self) -> tuple[bool, str]:

@@ -180,7 +180,7 @@ def test_detections_carry_the_confidence_as_their_score(monkeypatch):
 def test_a_rejected_answer_publishes_nothing_but_its_timings_count(model, monkeypatch):
     rejected = PoseResult('chair_0001', 'chair', np.eye(3), np.zeros(3), confidence=0.2,
                           rejected=True, reason='confidence 0.20 below 0.50',
-                          timings={'features': 0.01, 'total': 0.3})
+                          timings={'features': 0.01, 'total': 0.3}, stray_share=0.04)
     monkeypatch.setattr(model, 'estimate', lambda *args, **kwargs: rejected)
 
     class Recorder:
@@ -202,5 +202,7 @@ def test_a_rejected_answer_publishes_nothing_but_its_timings_count(model, monkey
             assert snap['rejected_low_confidence'] == 1 and 'answered' not in snap
             assert snap['stage_total_p50_ms'] == pytest.approx(300.0)
             assert 'confidence_last' not in snap   # confidences are of published answers
+            # strays are counted for every estimate, rejected or not
+            assert snap['with_strays'] == 1 and snap['stray_share_mean'] == pytest.approx(0.04)
         finally:
             node.destroy_node()
