@@ -50,10 +50,14 @@ bench: setup
 
 # regenerates docs/results/ROBOT_validation.md (pcrp only, with the min_confidence sweep: about 6
 # minutes) and ROBOT.md (pcrp and Open3D's pipelines on YCB depth-camera views: about an hour on a
-# shared 2-core machine, nearly all of it Open3D's; --baseline-views 1 halves that)
+# shared 2-core machine, nearly all of it Open3D's; --baseline-views 1 halves that), then
+# SEGMENTATION_validation.md and SEGMENTATION.md (the same views as a segmenter may cut them: about
+# 7 minutes each)
 robot: setup
 	$(PY) -m tools robot-report --data ../shared/data/ycb --out docs/results --split validation --no-baselines
 	$(PY) -m tools robot-report --data ../shared/data/ycb --out docs/results
+	$(PY) -m tools segmentation-report --data ../shared/data/ycb --out docs/results --split validation
+	$(PY) -m tools segmentation-report --data ../shared/data/ycb --out docs/results
 
 clean-venv:
 	rm -rf $(VENV)
