@@ -188,6 +188,14 @@ def _duplicated(g, h):
     return _msg(np.concatenate([g.points, g.points]), h)
 
 
+def _speck_behind(g, h):
+    # what a loose cluster takes in beside the object: a tenth as many points again, half a metre
+    # behind it; kept, they made the shipped model reject its hammer (turned 180 degrees)
+    rng = np.random.default_rng(5)
+    centre = g.points.mean(axis=0) * [1.0, 1.0, 0.0] + [0.0, 0.0, g.points[:, 2].max() + 0.5]
+    return _msg(np.vstack([g.points, centre + rng.normal(0.0, 0.01, (40, 3))]), h)
+
+
 def _shape(kind):
     def make(g, h):
         rng = np.random.default_rng(0)
@@ -332,6 +340,8 @@ CASES = [
     Case('line', '500 points on a line', _degenerate('line'), _rejected('degenerate')),
     Case('plane', '500 points on a plane', _degenerate('plane'), _SHAPELESS),
     Case('duplicated', 'every point sent twice', _duplicated, _ANSWER),
+    Case('speck_behind', '40 points of something else, a 1 cm blob 0.5 m behind the object',
+         _speck_behind, _ANSWER),
     Case('sphere', "a sphere's surface (no preferred orientation)", _shape('sphere'), _SHAPELESS),
     Case('cube', "a cube's surface (24 equal orientations)", _shape('cube'), _SHAPELESS),
 ]
