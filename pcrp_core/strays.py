@@ -54,9 +54,8 @@ def strays(points: np.ndarray, reach: float) -> np.ndarray:
     gallery object's diameter, in the points' units. All False when nothing lies apart.
     """
     n = len(points)
-    out = np.zeros(n, dtype=bool)
     if n <= NEIGHBOURS:
-        return out
+        return np.zeros(n, dtype=bool)
     # an unbalanced tree builds in half the time and answers these queries as fast
     tree = cKDTree(points, balanced_tree=False, compact_nodes=False)
     dist, idx = tree.query(points, k=NEIGHBOURS + 1)
@@ -66,20 +65,16 @@ def strays(points: np.ndarray, reach: float) -> np.ndarray:
     graph = coo_matrix((np.ones(len(rows)), (rows, idx[:, 1:][linked])), shape=(n, n))
     count, group = connected_components(graph, directed=False)
     if count == 1:
-        return out
+        return np.zeros(n, dtype=bool)
     sizes = np.bincount(group)
     main = int(np.argmax(sizes))
     body = points[group == main]
     size = float(np.linalg.norm(np.ptp(body, axis=0)))
-    near_body = cKDTree(body)
-    for g in np.flatnonzero(sizes):
-        if g == main:
-            continue
-        members = group == g
-        if sizes[g] <= SPECK:
-            out[members] = True
-            continue
-        gap = float(near_body.query(points[members])[0].min())
-        if gap > reach or (sizes[g] < SMALL_SHARE * n and gap > FAR_SHARE * size):
-            out[members] = True
-    return out
+    # each group's gap to the object: the least distance of its points to the object's
+    others = group != main
+    gaps = np.full(count, np.inf)
+    np.minimum.at(gaps, group[others], cKDTree(body).query(points[others])[0])
+    small_and_far = (sizes < SMALL_SHARE * n) & (gaps > FAR_SHARE * size)
+    apart = (sizes <= SPECK) | (gaps > reach) | small_and_far
+    apart[main] = False
+    return apart[group]

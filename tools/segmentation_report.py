@@ -122,11 +122,9 @@ def run(data: Path, split: str, views: int, cache: Path, objects: int | None = N
             'views': jsonable(views_of, 4), 'seconds': time.perf_counter() - t_start}
 
 
-def _pct(x) -> str:
-    return '-' if x is None or x != x else f'{100 * x:.0f} %'
-
-
 def markdown(res: dict) -> str:
+    from tools.robot_writer import _pct
+
     m = res['machine']
     n_views = len(res['objects']) * res['views_per_object']
     split = '' if res['split'] == 'test' else f" --split {res['split']}"
