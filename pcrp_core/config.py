@@ -456,6 +456,12 @@ class InstanceOptions(Options):
         "(background pixels a mask took in, flying pixels at the object's edges, a speck of "
         'something else), which otherwise throw the answer off.',
     )
+    drop_support: bool = setting(
+        True,
+        'Clouds matched view by view with up known: first set aside the table a mask took in '
+        "around the object's foot, the cloud's lowest layer where it is crowded as a plane seen "
+        'across (not in flat views).',
+    )
     local_shape_objects: int = setting(
         12, "Objects looked for then: those whose views have the cloud's shape, nearest first.",
         low=1,
@@ -497,7 +503,9 @@ class InstanceOptions(Options):
 USER_POSE_SETTINGS = ('refine', 'up_tolerance_deg')
 # and the view-by-view ones: when to look again by local shape, time traded for partly hidden
 # objects (docs/node.md), and whether a view's strays are set aside (for a segmenter known clean)
-USER_INSTANCE_SETTINGS = ('local_shape_cost', 'local_shape_cost_hidden', 'drop_strays')
+USER_INSTANCE_SETTINGS = (
+    'local_shape_cost', 'local_shape_cost_hidden', 'drop_strays', 'drop_support'
+)
 
 # The paper's registration: feature matches within the symmetry halves, Procrustes in RANSAC,
 # the best-fitting of those hypotheses; one retrieved object, no principal-axis, half-turn or

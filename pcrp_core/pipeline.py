@@ -48,6 +48,7 @@ from pcrp_core.preprocess import check_geometry, clean, screen, Screened, spread
 from pcrp_core.result import PoseResult
 from pcrp_core.retrieval import describe, PreparedCache
 from pcrp_core.strays import strays
+from pcrp_core.support import support
 from pcrp_core.threads import threads_from_environment
 from pcrp_core.vlad import VLAD
 
@@ -323,29 +324,45 @@ class PCRP:
         return model
 
     # -- querying -------------------------------------------------------------------------------
-    def prepare(self, points, viewpoint=None) -> np.ndarray:
+    def prepare(self, points, viewpoint=None, up=None) -> np.ndarray:
         """
-        Return the cloud as estimate(points, viewpoint) will use it.
+        Return the cloud as estimate(points, viewpoint, up) will use it.
 
         Finite, at most max_points, checked for geometry a pose can be read from (raises
         InvalidCloud otherwise); a cloud matched view by view has its strays set aside first
-        (the setting drop_strays, pcrp_core/strays.py).
+        (the setting drop_strays, pcrp_core/strays.py), and with up known the table under it
+        (drop_support, pcrp_core/support.py).
         """
-        return self._prepared(points, _checked_viewpoint(viewpoint), self.options)[0]
+        up = None if up is None else self.check_up(up)
+        return self._prepared(points, _checked_viewpoint(viewpoint), self.options, up)[0]
 
-    def _prepared(self, points, viewpoint, opts: QueryOptions) -> tuple[np.ndarray, float]:
-        """Return prepare()'s cloud and the share of the screened points set aside as strays."""
+    def _prepared(
+        self, points, viewpoint, opts: QueryOptions, up=None
+    ) -> tuple[np.ndarray, float, float, float | None]:
+        """
+        Return prepare()'s cloud, the shares of the screened points set aside, and the floor.
+
+        The shares: as strays, and as the table's layer; the floor: the height along up under which
+        the table's layer was set aside (None if it was not).
+        """
         n = min(opts.max_points, self.n_points)
-        if not (self.uses_views(viewpoint, opts) and self.instance_options.drop_strays):
-            return clean(points, n, opts.min_points, opts.seed), 0.0
+        settings = self.instance_options
+        by_views = self.uses_views(viewpoint, opts)
+        cut_support = by_views and settings.drop_support and up is not None
+        if not (cut_support or by_views and settings.drop_strays):
+            return clean(points, n, opts.min_points, opts.seed), 0.0, 0.0, None
         if not isinstance(points, Screened):
             points = screen(points, n, opts.min_points, opts.seed)
         cloud = points.points
-        apart = strays(cloud, float(self.templates.diameter.max()))
-        if apart.any():
-            cloud = cloud[~apart]
+        # the table first: what is left of it beyond the object's outline then lies apart
+        table, floor = support(cloud, up) if cut_support else (np.zeros(len(cloud), bool), None)
+        apart = np.zeros(len(cloud), dtype=bool)
+        if settings.drop_strays:
+            apart[~table] = strays(cloud[~table], float(self.templates.diameter.max()))
+        if apart.any() or table.any():
+            cloud = cloud[~(apart | table)]
             check_geometry(cloud, opts.min_points)
-        return spread(cloud, n), float(apart.mean())
+        return spread(cloud, n), float(apart.mean()), float(table.mean()), floor
 
     def screen(self, points) -> Screened:
         """
@@ -440,7 +457,8 @@ class PCRP:
         depth cloud read with DepthImage.from_organized), so that surface something in front of
         the object hid is not taken for missing; used when the cloud is answered view by view.
         A cloud answered view by view first has the points lying apart from the object set aside
-        (instance setting drop_strays; the result's stray_share says how many).
+        (instance setting drop_strays; the result's stray_share says how many), and with up known
+        the table's layer under it (drop_support; table_share).
         """
         from pcrp_core.category import answer as category
         from pcrp_core.instance import answer as views
@@ -451,13 +469,15 @@ class PCRP:
         opts, pose_opts = self.options, self.pose_options
         up_pair = None if up is None else (self.check_up(up), self.up_axis)
         viewpoint, scene = _checked_viewpoint(viewpoint), _checked_scene(scene)
-        pts, stray_share = self._prepared(points, viewpoint, opts)
+        pts, stray_share, table_share, floor = self._prepared(
+            points, viewpoint, opts, None if up_pair is None else up_pair[0]
+        )
         timings = {'preprocess': time.perf_counter() - t0}
         if self.uses_views(viewpoint, opts):
             return dataclasses.replace(views.answer(
                 self, pts, np.asarray(viewpoint, dtype=np.float64), up_pair, opts, timings, t0,
-                scene,
-            ), stray_share=stray_share)
+                scene, floor,
+            ), stray_share=stray_share, table_share=table_share)
         return category.answer(self, pts, viewpoint, up_pair, opts, pose_opts, timings, t0)
 
 

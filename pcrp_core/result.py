@@ -49,6 +49,8 @@ class PoseResult:
     n_points: int = 0             # points used after cleaning and downsampling
     # share of a camera view's points set aside as lying apart from the object (strays.py)
     stray_share: float = 0.0
+    # and, with up known, as the table's layer under it (support.py)
+    table_share: float = 0.0
 
     @property
     def transform(self) -> np.ndarray:
@@ -87,4 +89,5 @@ class PoseResult:
             'timings': {k: float(v) for k, v in self.timings.items()},
             'n_points': int(self.n_points),
             'stray_share': float(self.stray_share),
+            'table_share': float(self.table_share),
         }

@@ -23,13 +23,15 @@ from a generator seeded by (seed, object index, view, fault), so every run adds 
 from __future__ import annotations
 
 import numpy as np
+from pcrp_core.sources.camera import RangeNoise
 from scipy import ndimage
 
 FAULTS = {
     'clean': 'nothing: the perfect mask of the other reports',
     'speck_behind': '20 points of something else, a 1 cm blob 0.1-1 m behind the object',
     'speck_near': '20 points of something else, a 1 cm blob 2-10 cm behind the object',
-    'wide_mask': "the mask a pixel too wide: the background's pixels around the outline",
+    'wide_mask': "the mask a pixel too wide: the background's pixels around the outline (with "
+                 'range noise)',
     'flying_pixels': "half the outline's pixels measured between the edge's depth and the "
                      "background's (a depth camera's flying pixels)",
 }
@@ -61,7 +63,8 @@ def with_fault(scene, mesh, fault: str) -> np.ndarray:
                             (v - scene.camera.cy) / scene.camera.fy, np.ones(len(u))])
     far = _background(scene, mesh, rays, points[:, 2].max() + rng.uniform(*WALL_BEHIND))
     if fault == 'wide_mask':
-        return np.vstack([points, rays * far[:, None]])
+        # measured as the object's pixels are: with the camera's range error
+        return np.vstack([points, RangeNoise().apply(rays * far[:, None], rng)])
     half = rng.random(len(u)) < 0.5
     edge = _edge_depth(points, mask, scene.camera)[v[half], u[half]]
     z = edge + rng.uniform(0.0, 1.0, int(half.sum())) * (far[half] - edge)

@@ -105,7 +105,7 @@ def record(scene: Scene, answer, seconds: float, truths: Truths, reason: str = '
            'add': None, 'add_s': None, 'surface_error': None, 'pose_right': False,
            'rotation_error_deg': None, 'translation_error': None, 'rejected': True,
            'reason': reason, 'confidence': 0.0, 'candidate_rank': None, 'stray_share': 0.0,
-           'seconds': float(seconds), 'timings': {}}
+           'table_share': 0.0, 'seconds': float(seconds), 'timings': {}}
     if answer is None:
         return row
     right = answer.gallery_id == scene.object_id
@@ -120,6 +120,7 @@ def record(scene: Scene, answer, seconds: float, truths: Truths, reason: str = '
                right_or_twin=bool(right or twin), rejected=bool(answer.rejected),
                reason=answer.reason, confidence=float(confidence), candidate_rank=rank,
                stray_share=float(getattr(answer, 'stray_share', 0.0)),
+               table_share=float(getattr(answer, 'table_share', 0.0)),
                timings={k: float(v) for k, v in (getattr(answer, 'timings', None) or {}).items()})
     R = np.asarray(answer.rotation, dtype=np.float64)
     t = np.asarray(answer.translation, dtype=np.float64)

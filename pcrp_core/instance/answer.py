@@ -34,17 +34,21 @@ def answer(
     timings: dict,
     t0: float,
     scene=None,
+    floor: float | None = None,
 ) -> PoseResult:
     """
     Return the PoseResult of a cleaned cloud pts seen from viewpoint (see PCRP.estimate).
 
     The cloud is moved so the camera is at the origin; its frame's orientation does not matter.
+    floor: the height along up under which the table's layer was set aside (support.py), if it
+    was.
     """
     rng = np.random.default_rng(opts.seed)
     up, up_object = (None, None) if up_pair is None else up_pair
     match = model.matcher.match(
         pts - viewpoint, model.instance_options, up, up_object, rng, timings,
         scene=None if scene is None else seen_from(scene, viewpoint),
+        floor=None if floor is None else floor - float(viewpoint @ up),
     )
     best = match.best
     if model.view_calibration is not None:

@@ -246,7 +246,7 @@ class InstanceMatcher:
             clock.lap('verification')
 
     def match(self, points: np.ndarray, opts, up=None, up_object=None, rng=None, timings=None,
-              exclude=(), scene=None) -> Match:
+              exclude=(), scene=None, floor=None) -> Match:
         """
         Match a cloud against the gallery: which object it shows, in which pose, and what it beat.
 
@@ -257,6 +257,8 @@ class InstanceMatcher:
         be if the object were not in the gallery).
         scene: (M, 3) what else the camera measured, in the same frame, or its DepthImage:
         surface an answer expects behind it is not counted missing (occlusion.py).
+        floor: with up, the height along it under which the cloud's points were set aside as the
+        table's layer (support.py): surface an answer expects that low is not counted missing.
         """
         import open3d as o3d
 
@@ -266,6 +268,8 @@ class InstanceMatcher:
         query, noise = query_surface(points)
         if scene is not None:
             query.occluders = occluders(scene, points, query.spacing, float(tpl.diameter.max()))
+        if floor is not None and up is not None:
+            query.floor = (np.asarray(up, dtype=np.float64), float(floor))
         tau = max(opts.fit_tolerance, opts.noise_tolerance * noise)
         view = hypotheses.QueryView(points)
         sample = points[

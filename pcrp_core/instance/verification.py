@@ -43,6 +43,9 @@ class Surface:
     spacing: float
     # a query cloud given the rest of its scene: what the camera saw in front of it (occlusion.py)
     occluders: Occluders | None = None
+    # a query cloud cut at the table (support.py): (up, the height along it under which its
+    # points were set aside)
+    floor: tuple[np.ndarray, float] | None = None
 
 
 def local_planes(points: np.ndarray, tree: cKDTree, k: int = 10) -> tuple[np.ndarray, np.ndarray]:
@@ -127,9 +130,9 @@ def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray,
     Return the Fit of the object (surface, in its own frame) at pose (R, t) to the query.
 
     expected: indices of the surface points the camera would see (less those the query's
-    occluders hide). unshown_weight: how much an expected point missing from the cloud costs
-    against a cloud point off the object (less than 1: the segmenter may have cut away what
-    something in front of the object hid).
+    occluders hide, and those under its floor). unshown_weight: how much an expected point
+    missing from the cloud costs against a cloud point off the object (less than 1: the segmenter
+    may have cut away what something in front of the object hid).
     """
     to_object = distances((query.points - t) @ R, surface)
     shown = surface.points[expected] @ R.T + t
@@ -137,6 +140,11 @@ def judge(query: Surface, surface: Surface, expected: np.ndarray, R: np.ndarray,
     if query.occluders is not None and len(expected):
         keep = ~hidden(shown, query.occluders, tau)
         n_hidden = int(len(keep) - keep.sum())
+        expected, shown = expected[keep], shown[keep]
+    if query.floor is not None and len(expected):
+        # the cloud lost what lay that low with the table; the object's surface there too
+        up, top = query.floor
+        keep = shown @ up >= top
         expected, shown = expected[keep], shown[keep]
     if len(expected):
         to_query = distances(shown, query)

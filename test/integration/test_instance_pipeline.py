@@ -211,3 +211,27 @@ def test_background_a_mask_took_in_is_set_aside_before_a_view_is_matched(mesh_mo
     kept = model.with_options(drop_strays=False).prepare(dirty, viewpoint=camera)
     assert kept[:, 2].max() >= wall[:, 2].min()
     assert model.prepare(dirty)[:, 2].max() >= wall[:, 2].min()
+
+
+def test_the_table_a_mask_took_in_is_set_aside_when_up_is_known(mesh_model):
+    # the table around the can's foot, as a mask a pixel too wide takes it in: touching the can
+    model, meshes = mesh_model
+    variant = model.with_options()
+    variant.meta = dict(model.meta, up_axis=[0.0, 0.0, 1.0])  # the shapes stand z up
+    scene = sample_scene(meshes['can'], 'can', 2, 0, 'table', seed=3)
+    height = scene.points @ scene.up
+    foot = scene.points[height < height.min() + 0.01]
+    rng = np.random.default_rng(0)
+    out = foot - np.outer(foot @ scene.up - height.min(), scene.up)
+    ring = out + 0.006 * (out - scene.points.mean(0)) / np.linalg.norm(
+        out - scene.points.mean(0), axis=1, keepdims=True) + rng.normal(0, 0.001, out.shape)
+    dirty = np.vstack([scene.points, ring])
+    camera = np.zeros(3)
+    low = height.min() + 0.002
+    assert (variant.prepare(dirty, camera, up=scene.up) @ scene.up).min() > low
+    # kept without up, or with the setting off
+    assert (variant.prepare(dirty, camera) @ scene.up).min() < low
+    off = variant.with_options(drop_support=False)
+    assert (off.prepare(dirty, camera, up=scene.up) @ scene.up).min() < low
+    answer = variant.estimate(dirty, camera, up=scene.up)
+    assert answer.table_share > 0.0 and answer.gallery_id == 'can'

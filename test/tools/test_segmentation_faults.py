@@ -19,7 +19,7 @@ from pcrp_core.evaluation.scenes import sample_scene
 from pcrp_core.sources.camera import Mesh
 import pytest
 from tools.segmentation_faults import FAULTS, SPECK_POINTS, with_fault
-from tools.segmentation_report import KINDS, markdown
+from tools.segmentation_report import KINDS, markdown, NOTHING_ASIDE
 
 BOX = o3d.geometry.TriangleMesh.create_box(0.12, 0.08, 0.05)
 MESH = Mesh(np.asarray(BOX.vertices, dtype=np.float64), np.asarray(BOX.triangles, dtype=np.int64))
@@ -56,16 +56,18 @@ def test_what_a_mask_takes_in_lies_behind_the_object_or_on_its_table(scene):
     far = scene.points[:, 2].max()
     assert (_added(scene, 'speck_behind')[:, 2] > far).mean() > 0.9
     wide = _added(scene, 'wide_mask')
+    # measured with the camera's range error: a few millimetres, a centimetre at 2 m
     if scene.up is None:
-        assert (wide[:, 2] > far + 0.09).all()
+        assert (wide[:, 2] > far + 0.05).all()
     else:
         table = ((MESH.vertices @ scene.R.T + scene.t) @ scene.up).min()
-        on_table = np.abs(wide @ scene.up - table) < 1e-6
+        on_table = np.abs(wide @ scene.up - table) < 0.015
         assert on_table.any() and (wide[~on_table, 2] > far).all()
+        assert np.abs(wide[on_table] @ scene.up - table).max() > 1e-4
     # flying pixels lie between the edge next to them and the background behind it
     flying = _added(scene, 'flying_pixels')
     assert flying[:, 2].min() >= scene.points[:, 2].min() - 1e-6
-    assert (flying[:, 2] <= np.maximum(wide[:, 2].max(), far) + 1e-6).all()
+    assert (flying[:, 2] <= np.maximum(wide[:, 2].max(), far) + 0.05).all()
 
 
 def test_an_unknown_fault_is_refused_by_name(scene):
@@ -81,7 +83,7 @@ def test_the_report_has_a_row_per_scenario_and_fault():
            'machine': {'cores': 2, 'cpu': 'cpu', 'date': '2026-12-07 00:00'},
            'model': {'recipe': 'pcrp build boxes --up-axis z', 'code': 'abc'},
            'results': {f'{k}/{f}/{s}': stats for k in KINDS for f in FAULTS
-                       for s in ('defaults', 'drop_strays off')}}
+                       for s in ('defaults', NOTHING_ASIDE)}}
     text = markdown(res)
     for kind, title in KINDS.items():
         for fault in FAULTS:
