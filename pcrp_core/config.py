@@ -457,10 +457,11 @@ class InstanceOptions(Options):
         'something else), which otherwise throw the answer off.',
     )
     drop_support: bool = setting(
-        True,
+        False,
         'Clouds matched view by view with up known: first set aside the table a mask took in '
         "around the object's foot, the cloud's lowest layer where it is crowded as a plane seen "
-        'across (not in flat views).',
+        'across (not in flat views). For a segmenter whose masks take in the table: it costs '
+        'partly hidden objects and the rejection of unknown ones (docs/method.md).',
     )
     local_shape_objects: int = setting(
         12, "Objects looked for then: those whose views have the cloud's shape, nearest first.",

@@ -216,7 +216,7 @@ def test_background_a_mask_took_in_is_set_aside_before_a_view_is_matched(mesh_mo
 def test_the_table_a_mask_took_in_is_set_aside_when_up_is_known(mesh_model):
     # the table around the can's foot, as a mask a pixel too wide takes it in: touching the can
     model, meshes = mesh_model
-    variant = model.with_options()
+    variant = model.with_options(drop_support=True)
     variant.meta = dict(model.meta, up_axis=[0.0, 0.0, 1.0])  # the shapes stand z up
     scene = sample_scene(meshes['can'], 'can', 2, 0, 'table', seed=3)
     height = scene.points @ scene.up
@@ -229,9 +229,10 @@ def test_the_table_a_mask_took_in_is_set_aside_when_up_is_known(mesh_model):
     camera = np.zeros(3)
     low = height.min() + 0.002
     assert (variant.prepare(dirty, camera, up=scene.up) @ scene.up).min() > low
-    # kept without up, or with the setting off
+    # kept without up, or with the setting off (its default)
     assert (variant.prepare(dirty, camera) @ scene.up).min() < low
     off = variant.with_options(drop_support=False)
     assert (off.prepare(dirty, camera, up=scene.up) @ scene.up).min() < low
+    assert not model.instance_options.drop_support
     answer = variant.estimate(dirty, camera, up=scene.up)
     assert answer.table_share > 0.0 and answer.gallery_id == 'can'

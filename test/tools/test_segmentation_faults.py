@@ -19,7 +19,7 @@ from pcrp_core.evaluation.scenes import sample_scene
 from pcrp_core.sources.camera import Mesh
 import pytest
 from tools.segmentation_faults import FAULTS, SPECK_POINTS, with_fault
-from tools.segmentation_report import KINDS, markdown, NOTHING_ASIDE
+from tools.segmentation_report import KINDS, markdown, NOTHING_ASIDE, TABLE_ASIDE
 
 BOX = o3d.geometry.TriangleMesh.create_box(0.12, 0.08, 0.05)
 MESH = Mesh(np.asarray(BOX.vertices, dtype=np.float64), np.asarray(BOX.triangles, dtype=np.int64))
@@ -84,7 +84,11 @@ def test_the_report_has_a_row_per_scenario_and_fault():
            'model': {'recipe': 'pcrp build boxes --up-axis z', 'code': 'abc'},
            'results': {f'{k}/{f}/{s}': stats for k in KINDS for f in FAULTS
                        for s in ('defaults', NOTHING_ASIDE)}}
+    res['results'].update({f'table/{f}/{TABLE_ASIDE}': stats for f in FAULTS})
     text = markdown(res)
     for kind, title in KINDS.items():
         for fault in FAULTS:
             assert f'| {title} | {fault} | 20 | 1.0 % | 90 % |' in text
+    # the table setting only where up is known
+    assert '| free in space | clean | 20 | 1.0 % | 90 % | 0 % | 5 % | - | - |' in text
+    assert '| on a table, up known | clean | 20 | 1.0 % | 90 % | 0 % | 5 % | 90 % | 0 % |' in text
