@@ -57,7 +57,8 @@ def support(points: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, float | Non
     Return (a mask of the points in the table's layer, the height along up the layer reaches).
 
     points: (N, 3) one camera's view of one object standing on a table, in metres; up: the table's
-    unit normal in the points' frame. (all False, None) when the view is flat.
+    unit normal in the points' frame. (all False, None) when the lowest layer is not crowded
+    (the object's own surface) or the view is flat.
     """
     height = points @ np.asarray(up, dtype=np.float64)
     if not len(height):
